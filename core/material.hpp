@@ -1,0 +1,39 @@
+#pragma once
+/// Material parameters of a soft body and the named presets that span "from stiff to elastic".
+
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "core/types.hpp"
+
+namespace softbake {
+
+/// Every value is independent of mesh resolution and body size, so a preset behaves alike on a
+/// 1k-face and a 100k-face mesh.
+struct Material {
+  /// Structural spring stiffness, N/m. For a regular triangulation this is the membrane's
+  /// stretch stiffness, which does not change when the mesh is refined.
+  Scalar stiffness = 1000;
+  /// Bending spring stiffness, N/m (springs across each pair of edge-adjacent triangles).
+  Scalar bendStiffness = 300;
+  /// Fraction of critical damping of each spring along its axis, 0..1.
+  Scalar damping = 0.05f;
+  /// Gas pressure at the rest volume, Pa. The gas amount is fixed from it: nRT = pressure·V_rest,
+  /// and P = nRT/V afterwards (Matyka & Ollila). Ignored on open meshes.
+  Scalar pressure = 100;
+};
+
+struct NamedMaterial {
+  std::string_view name;
+  std::string_view description;
+  Material material;
+};
+
+/// The presets in order from stiffest to softest.
+std::span<const NamedMaterial> materialPresets();
+
+/// The preset called `name`, or nothing.
+std::optional<Material> findMaterialPreset(std::string_view name);
+
+}  // namespace softbake

@@ -1,0 +1,40 @@
+#include "core/simulator.hpp"
+
+#include "core/error.hpp"
+#include "core/forces.hpp"
+#include "core/integrator.hpp"
+#include "core/plane_contact.hpp"
+#include "core/text.hpp"
+#include "core/weld.hpp"
+
+namespace softbake {
+
+Simulator::Simulator(World world)
+    : world_(std::move(world)), substeps_(chooseSubsteps(world_, world_.settings.substeps)) {}
+
+void Simulator::step(int frame) {
+  computeSpringForces(world_);
+  computeVolumes(world_);
+  computePressureForces(world_);
+  if (!integrate(world_, Scalar(substeps_.timeStep))) reportBlowUp(frame);
+  stats_.planeContacts += resolvePlaneContacts(world_);
+}
+
+void Simulator::advanceToFrame(int frame) {
+  stats_ = {};
+  for (int s = 0; s < substeps_.substeps; ++s) step(frame);
+}
+
+void Simulator::reportBlowUp(int frame) const {
+  const Index particle = findRunawayParticle(world_);
+  const Body& body = world_.bodies[particle == kNoParticle ? 0 : world_.particleBody[particle]];
+  const Vec3& v = world_.velocity[particle == kNoParticle ? 0 : particle];
+  throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
+                  particle - body.firstParticle, " reached speed ",
+                  v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"),
+                  " (limit ", world_.settings.maxSpeed, "). Use more substeps (now ",
+                  substeps_.substeps, ", stable from ", substeps_.minimumStableSubsteps,
+                  ") or a lower stiffness"));
+}
+
+}  // namespace softbake

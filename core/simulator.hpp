@@ -1,0 +1,44 @@
+#pragma once
+/// Advances a World frame by frame: the fixed sequence of stages of one substep.
+///
+///   forces (springs, volume, pressure) → integrate (paper §1.2) → collisions → blow-up check
+///
+/// The collision stage sees each particle's segment previousPosition → position, which is what the
+/// line–triangle tests of §2.3 need. Nothing here allocates after construction.
+
+#include "core/stability.hpp"
+#include "core/world.hpp"
+
+namespace softbake {
+
+/// Counts from the latest frame, for progress display and benchmarks.
+struct StepStats {
+  std::size_t planeContacts = 0;  ///< particle–plane responses summed over the frame's substeps
+};
+
+class Simulator {
+ public:
+  /// Chooses the substeps from world.settings.substeps (0: automatic).
+  explicit Simulator(World world);
+
+  const World& world() const { return world_; }
+  World& world() { return world_; }
+  const SubstepChoice& substeps() const { return substeps_; }
+  const StepStats& lastFrameStats() const { return stats_; }
+
+  /// One substep of `substeps().timeStep` seconds. Throws softbake::Error on a blow-up; `frame`
+  /// (1-based, the frame being computed) goes into that message.
+  void step(int frame);
+
+  /// All substeps from frame `frame − 1` to `frame`.
+  void advanceToFrame(int frame);
+
+ private:
+  [[noreturn]] void reportBlowUp(int frame) const;
+
+  World world_;
+  SubstepChoice substeps_;
+  StepStats stats_;
+};
+
+}  // namespace softbake

@@ -1,0 +1,30 @@
+#pragma once
+/// Reading triangle meshes from any file assimp reads.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/triangle_mesh.hpp"
+
+namespace softbake {
+
+struct MeshImportOptions {
+  /// Merge every mesh of the file into one (one body); otherwise one mesh per aiMesh instance.
+  bool mergeMeshes = false;
+};
+
+struct ImportedMeshes {
+  /// World space (node transforms applied, winding flipped under mirroring transforms),
+  /// triangles only. Named after the node, or the aiMesh, or the file.
+  std::vector<TriangleMesh> meshes;
+  std::vector<std::string> notes;  ///< things the user should hear about, one line each
+};
+
+/// Throws softbake::Error, naming the file, when it is missing, not a format assimp reads,
+/// malformed (including PLY headers that would crash assimp 5.2), has no triangles, has
+/// non-finite coordinates, or is too large for this machine's memory.
+ImportedMeshes importMeshFile(const std::filesystem::path& path,
+                              const MeshImportOptions& options = {});
+
+}  // namespace softbake

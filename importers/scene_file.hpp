@@ -1,0 +1,49 @@
+#pragma once
+/// Scene files (JSON) and the two scenes that need no file: the built-in default scene and a single
+/// mesh dropped on the ground. All three produce the same SceneFile.
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "core/scene_setup.hpp"
+
+namespace softbake {
+
+/// What the scene asks of the writers. Command-line options override these.
+struct OutputOptions {
+  int framePadding = 4;  ///< digits of the frame number in file names: scene_0001.obj
+  bool obj = true;       ///< write the OBJ sequence
+};
+
+struct SceneFile {
+  SceneSetup setup;
+  OutputOptions output;
+  std::vector<std::string> notes;  ///< what loading did that the user should hear about
+};
+
+/// Loads and validates a scene file. Mesh paths are relative to the scene file's folder. Throws
+/// softbake::Error naming the file and the key path: "scene.json: bodies[1].material.stiffness:
+/// expected number".
+SceneFile loadSceneFile(const std::filesystem::path& path);
+
+/// The same, from JSON already parsed; `source` names it in messages, `baseDirectory` resolves
+/// mesh paths.
+SceneFile parseScene(const nlohmann::json& json, std::string_view source,
+                     const std::filesystem::path& baseDirectory);
+
+/// The JSON text of the built-in default scene: two soft balls thrown at each other over a ground
+/// plane, 240 frames at 24 fps. examples/default.json is a copy, checked by a test.
+std::string_view defaultSceneJson();
+
+/// parseScene(defaultSceneJson()).
+SceneFile defaultScene();
+
+/// A scene of one mesh file: the file's meshes as soft bodies of the default material, scaled to
+/// about a metre when far from it (noted), dropped from above a ground plane.
+SceneFile sceneFromMeshFile(const std::filesystem::path& path);
+
+}  // namespace softbake
