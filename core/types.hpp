@@ -7,6 +7,7 @@
 /// bench/layout_bench measures both choices.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 #include <array>
 #include <cstdint>
 

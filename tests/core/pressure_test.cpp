@@ -1,0 +1,114 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/forces.hpp"
+#include "core/simulator.hpp"
+#include "test_worlds.hpp"
+
+namespace softbake {
+namespace {
+
+double sphereVolume(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r; }
+
+TEST(Volume, IcosphereConvergesToTheSphereAtSecondOrder) {
+  // An inscribed polyhedron's volume falls short by O(h²): each subdivision halves h, so the
+  // error drops about fourfold.
+  double previousError = 0;
+  for (int level = 2; level <= 5; ++level) {
+    Material material;
+    World world = buildWorld(test::ballScene(material, level, 1.0f, {0, 0, 0}, false, false));
+    computeVolumes(world);
+    const double error = 1 - world.bodyVolume[0] / sphereVolume(1.0);
+    EXPECT_GT(error, 0) << "level " << level << " must be inside the sphere";
+    if (level == 4) {
+      EXPECT_LT(error, 0.01);
+    }
+    if (previousError > 0) {
+      EXPECT_GT(previousError / error, 3.5) << "level " << level;
+      EXPECT_LT(previousError / error, 4.5) << "level " << level;
+    }
+    previousError = error;
+  }
+}
+
+TEST(Volume, MatchesTheSerialDoublePrecisionSumAtBuildTime) {
+  Material material;
+  World world = buildWorld(test::ballScene(material, 4, 0.7f, {3, -2, 5}, false, false));
+  const double atBuild = world.bodies[0].restVolume;
+  computeVolumes(world);
+  EXPECT_NEAR(world.bodyVolume[0], atBuild, 1e-12 * atBuild);
+}
+
+TEST(Pressure, ForcesOnAClosedBodySumToZero) {
+  Material material;
+  material.pressure = 500;
+  World world = buildWorld(test::ballScene(material, 4, 0.5f, {0, 0, 0}, false, false));
+  computeVolumes(world);
+  computePressureForces(world);
+  Vec3d sum = Vec3d::Zero();
+  double magnitude = 0;
+  for (const Vec3& f : world.triangleForce) {
+    sum += 3 * f.cast<double>();
+    magnitude += 3 * f.cast<double>().norm();
+  }
+  EXPECT_LT(sum.norm(), 1e-5 * magnitude);
+  // And the total outward push is P·(surface area).
+  EXPECT_NEAR(magnitude, 500.0 * 4 * std::numbers::pi * 0.25, 0.02 * magnitude);
+}
+
+TEST(Pressure, IsIdealGasOfTheCurrentVolume) {
+  Material material;
+  material.pressure = 200;
+  World world = buildWorld(test::ballScene(material, 3, 0.5f, {0, 0, 0}, false, false));
+  for (Vec3& p : world.position) p *= 2;  // eight times the volume
+  computeVolumes(world);
+  computePressureForces(world);
+  EXPECT_NEAR(world.bodyPressure[0], 200.0 / 8, 1e-3);
+}
+
+TEST(Pressure, OpenMeshHasNoPressure) {
+  Material material;
+  material.pressure = 500;
+  SceneSetup scene = test::ballScene(material, 2, 0.5f, {0, 0, 0}, false, false);
+  scene.bodies[0].mesh.triangles.pop_back();
+  BuildReport report;
+  World world = buildWorld(scene, &report);
+  EXPECT_FALSE(world.bodies[0].closed);
+  EXPECT_EQ(world.bodies[0].gasAmount, 0);
+  ASSERT_EQ(report.notes.size(), 1u);
+  EXPECT_NE(report.notes[0].find("pressure is off"), std::string::npos) << report.notes[0];
+}
+
+// Independent reference: restrict the body to uniform scalings x → λx. Spring energy is
+// Σ ½k(λ−1)²L², gas energy −nRT·ln V with V ∝ λ³. Stationary when λ(λ−1)·Σ kL² = 3nRT.
+double uniformScalingEquilibrium(const World& world) {
+  double stiffnessLengthSquared = 0;
+  for (const Spring& s : world.springs)
+    stiffnessLengthSquared += double(s.stiffness) * s.restLength * s.restLength;
+  const double c = 3 * world.bodies[0].gasAmount / stiffnessLengthSquared;
+  return (1 + std::sqrt(1 + 4 * c)) / 2;
+}
+
+TEST(Pressure, BalloonInflatesToTheIdealGasEquilibrium) {
+  Material balloon = *findMaterialPreset("balloon");
+  balloon.damping = 0.3f;  // settle within the test's few simulated seconds
+  World world = buildWorld(test::ballScene(balloon, 3, 0.5f, {0, 0, 0}, false, false));
+  const double lambda = uniformScalingEquilibrium(world);
+  ASSERT_GT(lambda, 1.1) << "the balloon preset should visibly inflate";
+  const double expectedVolume = world.bodies[0].restVolume * lambda * lambda * lambda;
+  Simulator simulator(std::move(world));
+  for (int frame = 2; frame <= 24 * 6; ++frame) simulator.advanceToFrame(frame);
+  World& end = simulator.world();
+  computeVolumes(end);
+  EXPECT_NEAR(end.bodyVolume[0] / expectedVolume, 1.0, 0.03)
+      << "λ=" << lambda << " volume " << end.bodyVolume[0] << " expected " << expectedVolume;
+  // Settled: the membrane no longer moves.
+  double maxSpeed = 0;
+  for (const Vec3& v : end.velocity) maxSpeed = std::max(maxSpeed, double(v.norm()));
+  EXPECT_LT(maxSpeed, 0.01);
+}
+
+}  // namespace
+}  // namespace softbake

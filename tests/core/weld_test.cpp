@@ -1,0 +1,84 @@
+#include "core/weld.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace softbake {
+namespace {
+
+/// A unit cube stored the way files store it: four vertices per face, 24 in all.
+std::pair<std::vector<Vec3f>, std::vector<Triangle>> splitCube() {
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  std::vector<Vec3f> positions;
+  std::vector<Triangle> triangles;
+  for (const auto& face : faces) {
+    const Index base = Index(positions.size());
+    for (int corner : face)
+      positions.emplace_back(float(corner & 1), float((corner >> 1) & 1), float((corner >> 2) & 1));
+    triangles.push_back({base, base + 1, base + 2});
+    triangles.push_back({base, base + 2, base + 3});
+  }
+  return {positions, triangles};
+}
+
+TEST(Weld, SplitCubeBecomesEightParticles) {
+  const auto [positions, triangles] = splitCube();
+  const WeldedMesh welded = weldByPosition(positions, triangles);
+  EXPECT_EQ(welded.positions.size(), 8u);
+  EXPECT_EQ(welded.triangles.size(), 12u);
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    EXPECT_EQ(welded.positions[welded.renderToParticle[v]], positions[v]);
+  for (std::size_t t = 0; t < welded.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(welded.triangles[t][c], welded.renderToParticle[welded.renderTriangles[t][c]]);
+}
+
+TEST(Weld, DropsDegenerateDuplicateAndUnreferenced) {
+  auto [positions, triangles] = splitCube();
+  positions.emplace_back(5, 5, 5);                         // unreferenced
+  triangles.push_back({0, 1, 1});                          // repeated vertex
+  triangles.push_back({0, 5, 0});                          // repeated vertex
+  triangles.push_back(triangles[0]);                       // duplicate
+  positions.emplace_back(0.f, 0.5f, 0.f);                  // on the edge 0–1: collinear
+  triangles.push_back({0, 1, Index(positions.size() - 1)});
+  const WeldedMesh welded = weldByPosition(positions, triangles);
+  EXPECT_EQ(welded.triangles.size(), 12u);
+  EXPECT_EQ(welded.degenerateTriangles, 3u);
+  EXPECT_EQ(welded.duplicateTriangles, 1u);
+  EXPECT_EQ(welded.unreferencedVertices, 1u);
+  EXPECT_EQ(welded.positions.size(), 8u) << "the collinear triangle's extra vertex must go too";
+  EXPECT_EQ(welded.renderToParticle[24], kNoParticle);
+}
+
+TEST(Weld, MatchesBruteForceOnANoisyCloud) {
+  // Reference: O(n²) union of points within the tolerance of an earlier representative.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> coordinate(-1, 1);
+  std::vector<Vec3f> points;
+  for (int i = 0; i < 400; ++i) points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  std::vector<Vec3f> positions;
+  std::vector<Triangle> triangles;
+  // Each triangle's corners are copies of cloud points, nudged far below the weld tolerance.
+  std::uniform_int_distribution<int> pick(0, 399);
+  std::uniform_real_distribution<float> nudge(-1e-8f, 1e-8f);
+  for (int t = 0; t < 1500; ++t) {
+    Triangle tri;
+    for (int c = 0; c < 3; ++c) {
+      tri[c] = Index(positions.size());
+      positions.push_back(points[pick(random)] + Vec3f(nudge(random), nudge(random), nudge(random)));
+    }
+    triangles.push_back(tri);
+  }
+  const WeldedMesh welded = weldByPosition(positions, triangles);
+  for (std::size_t a = 0; a < positions.size(); ++a)
+    for (std::size_t b = a + 1; b < positions.size(); ++b) {
+      if (welded.renderToParticle[a] == kNoParticle || welded.renderToParticle[b] == kNoParticle) continue;
+      const bool close = (positions[a] - positions[b]).norm() < 1e-6f;
+      ASSERT_EQ(close, welded.renderToParticle[a] == welded.renderToParticle[b]) << a << " " << b;
+    }
+}
+
+}  // namespace
+}  // namespace softbake
