@@ -1,0 +1,308 @@
+#include "importers/scene_file.hpp"
+
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "core/icosphere.hpp"
+#include "core/text.hpp"
+#include "importers/json_reader.hpp"
+#include "importers/mesh_import.hpp"
+#include "importers/mesh_transform.hpp"
+
+namespace softbake {
+
+namespace {
+
+constexpr int kMaxSubdivisions = 7;  // 163842 vertices; one more level is 655362
+
+std::string validPresetNames() {
+  std::string names;
+  for (const NamedMaterial& preset : materialPresets())
+    names += cat(names.empty() ? "" : ", ", preset.name);
+  return names;
+}
+
+constexpr double kMaxInt = std::numeric_limits<int>::max();
+
+// A count that is at least 1 and fits an int.
+int smallInteger(const JsonValue& value) {
+  const long long x = value.integerAtLeast(1);
+  if (x > std::numeric_limits<int>::max())
+    value.fail(cat("expected an integer <= ", std::numeric_limits<int>::max()));
+  return int(x);
+}
+
+Vec3 toVec3(const Eigen::Vector3d& v) {
+  return v.cast<Scalar>();
+}
+
+std::string nonEmptyString(const JsonValue& value) {
+  std::string text = value.string();
+  if (text.empty()) value.fail("expected a non-empty string");
+  return text;
+}
+
+class SceneParser {
+ public:
+  SceneParser(std::string_view source, const std::filesystem::path& baseDirectory)
+      : source_(source), baseDirectory_(baseDirectory) {}
+
+  SceneFile parse(const nlohmann::json& json) {
+    const JsonObject root =
+        JsonValue(json, source_, "").object({"name", "settings", "bodies", "colliders", "output"});
+    scene_.setup.name = std::filesystem::path(source_).stem().string();
+    if (auto name = root.find("name")) scene_.setup.name = nonEmptyString(*name);
+    if (auto settings = root.find("settings")) parseSettings(*settings);
+
+    const JsonValue bodies = root.at("bodies");
+    const std::vector<JsonValue> bodyValues = bodies.array();
+    if (bodyValues.empty()) bodies.fail("expected at least one body");
+    std::map<std::string, std::string> bodyNames;  // name -> key path that gave it
+    for (std::size_t i = 0; i < bodyValues.size(); ++i) parseBody(bodyValues[i], i, bodyNames);
+
+    if (auto colliders = root.find("colliders")) {
+      const std::vector<JsonValue> colliderValues = colliders->array();
+      for (std::size_t i = 0; i < colliderValues.size(); ++i) parseCollider(colliderValues[i], i);
+    }
+    if (auto output = root.find("output")) parseOutput(*output);
+    return std::move(scene_);
+  }
+
+ private:
+  void parseSettings(const JsonValue& value) {
+    const JsonObject object =
+        value.object({"fps", "frames", "substeps", "gravity", "units", "max_speed", "skin"});
+    SimulationSettings& settings = scene_.setup.settings;
+    if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
+    if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
+    if (auto substeps = object.find("substeps")) {
+      const nlohmann::json& raw = substeps->raw();
+      const bool isAuto = raw.is_string() && raw.get<std::string>() == "auto";
+      const double count = raw.is_number() ? raw.get<double>() : 0;
+      if (!isAuto && !(count >= 1 && count == std::floor(count) && count <= kMaxInt))
+        substeps->fail("expected \"auto\" or an integer >= 1");
+      settings.substeps = isAuto ? 0 : int(count);
+    }
+    if (auto gravity = object.find("gravity")) settings.gravity = toVec3(gravity->vector3());
+    if (auto units = object.find("units")) settings.units = nonEmptyString(*units);
+    if (auto maxSpeed = object.find("max_speed"))
+      settings.maxSpeed = Scalar(maxSpeed->numberAbove(0));
+    if (auto skin = object.find("skin")) settings.skin = Scalar(skin->numberAtLeast(0));
+  }
+
+  // The meshes a `mesh` key names, in their own space. A file may hold several.
+  std::vector<TriangleMesh> readMeshes(const JsonValue& value, bool merge) {
+    if (value.isString()) {
+      const std::filesystem::path given = value.string();
+      if (given.empty()) value.fail("expected a non-empty string");
+      const std::filesystem::path resolved =
+          (given.is_absolute() ? given : baseDirectory_ / given).lexically_normal();
+      std::error_code error;
+      if (!std::filesystem::exists(resolved, error))
+        value.fail(cat("mesh file not found: ", resolved.string()));
+      ImportedMeshes imported;
+      try {
+        imported = importMeshFile(resolved, {.mergeMeshes = merge});
+      } catch (const Error& importError) {
+        value.fail(importError.what());
+      }
+      for (std::string& note : imported.notes) scene_.notes.push_back(std::move(note));
+      return std::move(imported.meshes);
+    }
+    if (value.isObject()) {
+      const JsonObject object = value.object({"primitive", "subdivisions", "radius"});
+      const JsonValue primitive = object.at("primitive");
+      if (primitive.string() != "icosphere")
+        primitive.fail(cat("unknown primitive '", primitive.string(), "' (valid: icosphere)"));
+      int subdivisions = 3;
+      float radius = 0.5f;
+      if (auto s = object.find("subdivisions"))
+        subdivisions = int(s->integerIn(0, kMaxSubdivisions));
+      if (auto r = object.find("radius")) radius = float(r->numberAbove(0));
+      TriangleMesh mesh = makeIcosphere(subdivisions, radius);
+      mesh.name = "icosphere";
+      return {std::move(mesh)};
+    }
+    value.fail("expected string (a mesh file) or object (a primitive)");
+  }
+
+  static Eigen::Affine3d parseTransform(const JsonValue& value) {
+    const JsonObject object = value.object({"translate", "rotate", "scale"});
+    Eigen::Vector3d translate = Eigen::Vector3d::Zero(), rotate = Eigen::Vector3d::Zero();
+    Eigen::Vector3d scale = Eigen::Vector3d::Ones();
+    if (auto t = object.find("translate")) translate = t->vector3();
+    if (auto r = object.find("rotate")) rotate = r->vector3();
+    if (auto s = object.find("scale")) {
+      auto nonZero = [](const JsonValue& component) {
+        const double x = component.number();
+        // A zero scale flattens the body to nothing: no volume, no simulation.
+        if (x == 0) component.fail("expected a non-zero number");
+        return x;
+      };
+      if (s->raw().is_number()) {
+        scale.setConstant(nonZero(*s));
+      } else if (s->raw().is_array() && s->raw().size() == 3) {
+        for (int axis = 0; axis < 3; ++axis) scale[axis] = nonZero(s->element(std::size_t(axis)));
+      } else {
+        s->fail("expected number or array of 3 numbers");
+      }
+    }
+    return composeTransform(translate, rotate, scale);
+  }
+
+  static Material parseMaterial(const JsonValue& value) {
+    auto preset = [](const JsonValue& name) {
+      const std::optional<Material> material = findMaterialPreset(name.string());
+      if (!material)
+        name.fail(
+            cat("unknown material preset '", name.string(), "' (valid: ", validPresetNames(), ")"));
+      return *material;
+    };
+    if (value.isString()) return preset(value);
+    if (!value.isObject()) value.fail("expected string (a preset) or object");
+    const JsonObject object =
+        value.object({"preset", "stiffness", "bend_stiffness", "damping", "pressure"});
+    Material material = *findMaterialPreset("rubber");
+    if (auto name = object.find("preset")) material = preset(*name);
+    if (auto k = object.find("stiffness")) material.stiffness = Scalar(k->numberAbove(0));
+    if (auto k = object.find("bend_stiffness"))
+      material.bendStiffness = Scalar(k->numberAtLeast(0));
+    if (auto d = object.find("damping")) material.damping = Scalar(d->numberIn(0, 1));
+    if (auto p = object.find("pressure")) material.pressure = Scalar(p->numberAtLeast(0));
+    return material;
+  }
+
+  static Pins parsePins(const JsonValue& value) {
+    const JsonObject object = value.object({"indices", "boxes"});
+    Pins pins;
+    if (auto indices = object.find("indices"))
+      for (const JsonValue& index : indices->array())
+        pins.particles.push_back(Index(index.integerIn(0, std::numeric_limits<Index>::max() - 1)));
+    if (auto boxes = object.find("boxes")) {
+      for (const JsonValue& box : boxes->array()) {
+        const JsonObject corners = box.object({"min", "max"});
+        PinBox pinBox{corners.at("min").vector3().cast<float>(),
+                      corners.at("max").vector3().cast<float>()};
+        if ((pinBox.min.array() > pinBox.max.array()).any())
+          box.fail("expected min <= max on every axis");
+        pins.boxes.push_back(pinBox);
+      }
+    }
+    return pins;
+  }
+
+  void parseBody(const JsonValue& value, std::size_t index,
+                 std::map<std::string, std::string>& names) {
+    const JsonObject object = value.object(
+        {"name", "mesh", "merge_meshes", "transform", "material", "mass", "velocity", "pins"});
+    BodySetup body;
+    body.name = cat("body", index);
+    if (auto name = object.find("name")) body.name = nonEmptyString(*name);
+    if (auto material = object.find("material")) {
+      body.material = parseMaterial(*material);
+    } else {
+      body.material = *findMaterialPreset("rubber");
+    }
+    if (auto mass = object.find("mass")) body.mass = Scalar(mass->numberAbove(0));
+    if (auto velocity = object.find("velocity")) body.velocity = toVec3(velocity->vector3());
+    Eigen::Affine3d transform = Eigen::Affine3d::Identity();
+    if (auto t = object.find("transform")) transform = parseTransform(*t);
+    bool merge = false;
+    if (auto m = object.find("merge_meshes")) merge = m->boolean();
+    std::optional<JsonValue> pinsValue = object.find("pins");
+    if (pinsValue) body.pins = parsePins(*pinsValue);
+
+    const JsonValue meshValue = object.at("mesh");
+    std::vector<TriangleMesh> meshes = readMeshes(meshValue, merge);
+    // Particle indices belong to one welded mesh; across split bodies they would be ambiguous.
+    if (meshes.size() > 1 && !body.pins.particles.empty()) {
+      pinsValue->child("indices").fail(
+          cat("particle indices need a single mesh, but the file gives ", meshes.size(),
+              "; set merge_meshes to true or pin with boxes"));
+    }
+    for (TriangleMesh& mesh : meshes) {
+      BodySetup split = body;
+      if (meshes.size() > 1) split.name = cat(body.name, '/', mesh.name);
+      auto [existing, inserted] = names.try_emplace(split.name, value.path());
+      if (!inserted)
+        value.fail(cat("body name '", split.name, "' is already used by ", existing->second));
+      transformMesh(mesh, transform);
+      mesh.name = split.name;
+      split.mesh = std::move(mesh);
+      scene_.setup.bodies.push_back(std::move(split));
+    }
+  }
+
+  void parseCollider(const JsonValue& value, std::size_t index) {
+    if (!value.isObject()) value.fail("expected object");
+    const JsonValue typeValue = JsonObject(value).at("type");
+    const std::string type = typeValue.string();
+    const std::string defaultName = cat("collider", index);
+    if (type == "plane") {
+      const JsonObject object =
+          value.object({"type", "name", "point", "normal", "restitution", "friction"});
+      PlaneCollider plane;
+      plane.name = defaultName;
+      if (auto name = object.find("name")) plane.name = nonEmptyString(*name);
+      if (auto point = object.find("point")) plane.point = toVec3(point->vector3());
+      if (auto normal = object.find("normal")) {
+        const Eigen::Vector3d n = normal->vector3();
+        if (!(n.norm() > 0)) normal->fail("expected a non-zero vector");
+        plane.normal = toVec3(n.normalized());
+      }
+      readContact(object, plane.restitution, plane.friction);
+      scene_.setup.planes.push_back(std::move(plane));
+    } else if (type == "mesh") {
+      const JsonObject object =
+          value.object({"type", "name", "mesh", "transform", "restitution", "friction"});
+      StaticMeshCollider collider;
+      collider.name = defaultName;
+      if (auto name = object.find("name")) collider.name = nonEmptyString(*name);
+      Eigen::Affine3d transform = Eigen::Affine3d::Identity();
+      if (auto t = object.find("transform")) transform = parseTransform(*t);
+      readContact(object, collider.restitution, collider.friction);
+      // A static collider is one surface however many meshes its file holds.
+      std::vector<TriangleMesh> meshes = readMeshes(object.at("mesh"), /*merge=*/true);
+      collider.mesh = std::move(meshes.front());
+      transformMesh(collider.mesh, transform);
+      collider.mesh.name = collider.name;
+      scene_.setup.staticMeshes.push_back(std::move(collider));
+    } else {
+      typeValue.fail(cat("unknown collider type '", type, "' (valid: plane, mesh)"));
+    }
+  }
+
+  static void readContact(const JsonObject& object, Scalar& restitution, Scalar& friction) {
+    if (auto r = object.find("restitution")) restitution = Scalar(r->numberIn(0, 1));
+    if (auto f = object.find("friction")) friction = Scalar(f->numberAtLeast(0));
+  }
+
+  void parseOutput(const JsonValue& value) {
+    const JsonObject object = value.object({"frame_padding", "obj"});
+    if (auto padding = object.find("frame_padding"))
+      scene_.output.framePadding = int(padding->integerIn(1, 9));
+    if (auto obj = object.find("obj")) scene_.output.obj = obj->boolean();
+  }
+
+  std::string_view source_;
+  std::filesystem::path baseDirectory_;
+  SceneFile scene_;
+};
+
+}  // namespace
+
+SceneFile parseScene(const nlohmann::json& json, std::string_view source,
+                     const std::filesystem::path& baseDirectory) {
+  return SceneParser(source, baseDirectory).parse(json);
+}
+
+SceneFile loadSceneFile(const std::filesystem::path& path) {
+  const nlohmann::json json = readJsonFile(path);
+  return parseScene(json, path.string(), path.parent_path());
+}
+
+}  // namespace softbake

@@ -1,0 +1,86 @@
+// sceneFromMeshFile: a mesh file dropped on the ground, rescaled to about a metre when needed.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include "importers/scene_file.hpp"
+#include "test_files.hpp"
+
+namespace softbake {
+namespace {
+
+Eigen::AlignedBox3f boundsOf(const SceneSetup& setup) {
+  Eigen::AlignedBox3f bounds;
+  for (const BodySetup& body : setup.bodies)
+    for (const Triangle& t : body.mesh.triangles)
+      for (Index v : t) bounds.extend(body.mesh.positions[v]);
+  return bounds;
+}
+
+void expectDroppedOnTheGround(const SceneFile& scene, const std::string& name) {
+  EXPECT_EQ(scene.setup.name, name);
+  EXPECT_EQ(scene.setup.settings.fps, 24);
+  EXPECT_EQ(scene.setup.settings.frames, 240);
+  EXPECT_EQ(scene.setup.settings.substeps, 0);
+  ASSERT_EQ(scene.setup.planes.size(), 1u);
+  EXPECT_EQ(scene.setup.planes[0].name, "ground");
+  EXPECT_EQ(scene.setup.planes[0].normal, Vec3::UnitY());
+  const Eigen::AlignedBox3f bounds = boundsOf(scene.setup);
+  EXPECT_NEAR(bounds.min().y(), 0.5f, 1e-5f);
+  EXPECT_NEAR(bounds.center().x(), 0, 1e-5f);
+  EXPECT_NEAR(bounds.center().z(), 0, 1e-5f);
+  for (const BodySetup& body : scene.setup.bodies) {
+    EXPECT_EQ(body.material.stiffness, findMaterialPreset("rubber")->stiffness);
+    EXPECT_EQ(body.mesh.name, body.name);
+  }
+}
+
+TEST(MeshScene, ScalesTheSmallBunnyUpToAMetre) {
+  SOFTBAKE_REQUIRE_SHARED_MESHES();
+  const auto file = test::sharedMeshes() / "bunny.ply";
+  const SceneFile scene = sceneFromMeshFile(file);
+  expectDroppedOnTheGround(scene, "bunny");
+  ASSERT_EQ(scene.setup.bodies.size(), 1u);
+  EXPECT_EQ(scene.setup.bodies[0].name, "bunny");
+  EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1, 1e-5);
+  ASSERT_EQ(scene.notes.size(), 1u);
+  EXPECT_EQ(scene.notes[0],
+            file.string() + ": scaled by 6.43 to about a metre (its largest side was 0.156 units)");
+}
+
+TEST(MeshScene, ScalesTheLargeBallDownToAMetre) {
+  SOFTBAKE_REQUIRE_SHARED_MESHES();
+  const auto file = test::sharedMeshes() / "ballA.off";
+  const SceneFile scene = sceneFromMeshFile(file);
+  expectDroppedOnTheGround(scene, "ballA");
+  EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1, 1e-5);
+  ASSERT_EQ(scene.notes.size(), 1u);
+  EXPECT_EQ(
+      scene.notes[0],
+      file.string() + ": scaled by 0.0722 to about a metre (its largest side was 13.9 units)");
+}
+
+TEST(MeshScene, LeavesMetreSizedMeshesAlone) {
+  SOFTBAKE_REQUIRE_SHARED_MESHES();
+  const SceneFile scene = sceneFromMeshFile(test::sharedMeshes() / "spot.obj");
+  expectDroppedOnTheGround(scene, "spot");
+  EXPECT_TRUE(scene.notes.empty());
+  EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1.71791f, 1e-4f);
+}
+
+TEST(MeshScene, OneBodyPerMeshOfAMultiMeshFile) {
+  SOFTBAKE_REQUIRE_SHARED_MESHES();
+  const SceneFile scene =
+      sceneFromMeshFile(test::sharedMeshes() / "cubes_with_mirroring_and_pivot.fbx");
+  const std::string stem = "cubes_with_mirroring_and_pivot";
+  expectDroppedOnTheGround(scene, stem);
+  std::vector<std::string> names;
+  for (const BodySetup& body : scene.setup.bodies) names.push_back(body.name);
+  EXPECT_EQ(names, (std::vector<std::string>{stem + "/Cube2", stem + "/Cube1", stem + "/Cube3",
+                                             stem + "/Cube1_2"}));
+  EXPECT_TRUE(scene.notes.empty());  // 0.33 across: within [0.25, 4]
+}
+
+}  // namespace
+}  // namespace softbake
