@@ -1,6 +1,7 @@
 #pragma once
 /// A simulated frame handed from the simulation thread to the writers.
 
+#include <cstdint>
 #include <vector>
 
 #include "core/types.hpp"
@@ -8,8 +9,8 @@
 namespace softbake {
 
 struct Frame {
-  int number = 1;       ///< 1-based: frame 1 is the initial state
-  double time = 0;      ///< seconds since the start
+  int number = 1;               ///< 1-based: frame 1 is the initial state
+  double time = 0;              ///< seconds since the start
   std::vector<Vec3> positions;  ///< every particle of the World, global order
 };
 
@@ -24,6 +25,9 @@ class FrameSink {
   virtual void finish() {}
   /// Short name for messages: "obj".
   virtual const char* name() const = 0;
+  /// Bytes written to disk so far, for the progress display. Called from other threads while
+  /// write() runs, so implementations keep it in an atomic.
+  virtual std::uint64_t bytesWritten() const { return 0; }
 };
 
 }  // namespace softbake

@@ -1,0 +1,9 @@
+#include "exporters/version.hpp"
+
+namespace softbake {
+
+const char* softbakeVersion() {
+  return SOFTBAKE_VERSION;
+}
+
+}  // namespace softbake

@@ -1,0 +1,389 @@
+#include "exporters/obj_sequence_writer.hpp"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <gtest/gtest.h>
+
+#include <assimp/Importer.hpp>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/normals.hpp"
+#include "core/text.hpp"
+#include "exporters/version.hpp"
+#include "test_world.hpp"
+
+namespace softbake {
+namespace {
+
+using test::listDirectory;
+using test::makeBallsWorld;
+using test::readFile;
+using test::ScratchDirectory;
+
+/// The world's rest positions, stretched and rippled so every coordinate is an unremarkable float.
+Frame deformedFrame(const World& world, int number) {
+  Frame frame;
+  frame.number = number;
+  frame.time = (number - 1) / 24.0;
+  frame.positions = world.position;
+  for (std::size_t i = 0; i < frame.positions.size(); ++i) {
+    Vec3& p = frame.positions[i];
+    p.x() *= Scalar(1.1);
+    p.y() += Scalar(0.013 * std::sin(double(i) * 0.7 + number));
+    p.z() -= Scalar(0.002 * double(number));
+  }
+  return frame;
+}
+
+/// What a minimal OBJ reader sees, numbers parsed exactly with from_chars.
+struct ParsedObj {
+  std::vector<std::string> objects, materials;
+  std::vector<Vec3> v;
+  std::vector<Vec2f> vt;
+  std::vector<Vec3f> vn;
+  std::vector<std::array<std::array<long, 3>, 3>> faces;  ///< v/vt/vn per corner, 0 when absent
+  std::vector<std::size_t> facesPerObject;
+  std::string mtllib;
+};
+
+template <class Number>
+Number parseNumber(std::string_view text) {
+  Number value{};
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  EXPECT_TRUE(error == std::errc() && end == text.data() + text.size()) << text;
+  return value;
+}
+
+ParsedObj parseObj(const std::string& text) {
+  ParsedObj obj;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string keyword, a, b, c;
+    words >> keyword >> a >> b >> c;
+    if (keyword == "o") {
+      obj.objects.push_back(a);
+      obj.facesPerObject.push_back(0);
+    } else if (keyword == "usemtl") {
+      obj.materials.push_back(a);
+    } else if (keyword == "mtllib") {
+      obj.mtllib = a;
+    } else if (keyword == "v") {
+      obj.v.emplace_back(parseNumber<Scalar>(a), parseNumber<Scalar>(b), parseNumber<Scalar>(c));
+    } else if (keyword == "vt") {
+      obj.vt.emplace_back(parseNumber<float>(a), parseNumber<float>(b));
+    } else if (keyword == "vn") {
+      obj.vn.emplace_back(parseNumber<float>(a), parseNumber<float>(b), parseNumber<float>(c));
+    } else if (keyword == "f") {
+      std::array<std::array<long, 3>, 3> face{};
+      const std::string corners[3] = {a, b, c};
+      for (int k = 0; k < 3; ++k) {
+        std::string_view rest = corners[k];
+        for (int part = 0; part < 3; ++part) {
+          const std::size_t slash = std::min(rest.find('/'), rest.size());
+          if (slash > 0) face[k][part] = parseNumber<long>(rest.substr(0, slash));
+          rest.remove_prefix(std::min(slash + 1, rest.size()));
+        }
+      }
+      obj.faces.push_back(face);
+      ++obj.facesPerObject.back();
+    } else {
+      EXPECT_TRUE(keyword.empty() || keyword[0] == '#' || keyword == "s") << line;
+    }
+  }
+  return obj;
+}
+
+std::vector<Vec3f> expectedNormals(const World& world, const Frame& frame, const Body& body) {
+  std::vector<Vec3f> normals;
+  computeSmoothNormals(world, frame.positions, body, normals);
+  return normals;
+}
+
+TEST(ObjSequenceWriter, ReadsBackThroughAssimpWithTheWrittenUvsAndNormals) {
+  const World world = makeBallsWorld({1.0f, 0.5f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  const Frame frame = deformedFrame(world, 2);
+  writer.write(frame);
+
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(writer.framePath(2).string(), aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  ASSERT_EQ(scene->mNumMeshes, world.bodies.size());
+  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+    const Body& body = world.bodies[b];
+    const aiMesh& mesh = *scene->mMeshes[b];
+    ASSERT_EQ(mesh.mNumFaces, body.triangleCount) << body.name;
+    ASSERT_TRUE(mesh.HasNormals());
+    ASSERT_TRUE(mesh.HasTextureCoords(0));
+    aiString material;
+    scene->mMaterials[mesh.mMaterialIndex]->Get(AI_MATKEY_NAME, material);
+    EXPECT_EQ(std::string(material.C_Str()), body.name);
+
+    const std::vector<Vec3f> normals = expectedNormals(world, frame, body);
+    for (Index f = 0; f < body.triangleCount; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      ASSERT_EQ(face.mNumIndices, 3u);
+      for (int k = 0; k < 3; ++k) {
+        const unsigned vertex = face.mIndices[k];
+        const Index particle = world.triangles[body.firstTriangle + f][k];
+        const Vec3& p = frame.positions[particle];
+        // assimp's own float parser may round the last bit differently; exactness is checked
+        // with from_chars below.
+        EXPECT_NEAR(mesh.mVertices[vertex].x, p.x(), 1e-6f);
+        EXPECT_NEAR(mesh.mVertices[vertex].y, p.y(), 1e-6f);
+        EXPECT_NEAR(mesh.mVertices[vertex].z, p.z(), 1e-6f);
+        const aiVector3D& n = mesh.mNormals[vertex];
+        EXPECT_NEAR(n.Length(), 1.0f, 1e-5f);
+        const Vec3f& expected = normals[particle - body.firstParticle];
+        EXPECT_NEAR(n.x, expected.x(), 1e-6f);
+        EXPECT_NEAR(n.y, expected.y(), 1e-6f);
+        EXPECT_NEAR(n.z, expected.z(), 1e-6f);
+        const Vec2f& uv = body.render.uvs[body.render.renderTriangles[f][k]];
+        EXPECT_NEAR(mesh.mTextureCoords[0][vertex].x, uv.x(), 1e-6f);
+        EXPECT_NEAR(mesh.mTextureCoords[0][vertex].y, uv.y(), 1e-6f);
+      }
+    }
+  }
+}
+
+TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
+  const World world = makeBallsWorld({1.0f, 0.5f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  const Frame frame = deformedFrame(world, 3);
+  writer.write(frame);
+  const ParsedObj obj = parseObj(readFile(writer.framePath(3)));
+
+  EXPECT_EQ(obj.mtllib, "balls.mtl");
+  EXPECT_EQ(obj.objects, (std::vector<std::string>{"ball0", "ball1"}));
+  EXPECT_EQ(obj.materials, obj.objects);
+  // Bit-exact: the shortest form reads back to the very same float.
+  ASSERT_EQ(obj.v.size(), frame.positions.size());
+  for (std::size_t i = 0; i < obj.v.size(); ++i) EXPECT_EQ(obj.v[i], frame.positions[i]) << i;
+
+  std::vector<Vec2f> uvs;
+  std::vector<Vec3f> normals;
+  for (const Body& body : world.bodies) {
+    uvs.insert(uvs.end(), body.render.uvs.begin(), body.render.uvs.end());
+    const std::vector<Vec3f> bodyNormals = expectedNormals(world, frame, body);
+    normals.insert(normals.end(), bodyNormals.begin(), bodyNormals.end());
+  }
+  EXPECT_EQ(obj.vt, uvs);
+  EXPECT_EQ(obj.vn, normals);
+
+  ASSERT_EQ(obj.faces.size(), world.triangles.size());
+  long uvOffset = 0;
+  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+    const Body& body = world.bodies[b];
+    EXPECT_EQ(obj.facesPerObject[b], body.triangleCount);
+    for (Index f = 0; f < body.triangleCount; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const auto& corner = obj.faces[body.firstTriangle + f][k];
+        const long particle = long(world.triangles[body.firstTriangle + f][k]) + 1;
+        EXPECT_EQ(corner[0], particle);
+        EXPECT_EQ(corner[1], uvOffset + long(body.render.renderTriangles[f][k]) + 1);
+        EXPECT_EQ(corner[2], particle);
+      }
+    uvOffset += long(body.render.uvs.size());
+  }
+}
+
+TEST(ObjSequenceWriter, HeaderNamesVersionFrameAndTime) {
+  const World world = makeBallsWorld({1.0f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  Frame frame = deformedFrame(world, 25);
+  frame.time = 1.0;
+  writer.write(frame);
+  const std::string text = readFile(writer.framePath(25));
+  EXPECT_EQ(text.rfind(std::string("# softbake ") + softbakeVersion() + "\n# frame 25, time 1 s\n" +
+                           "mtllib balls.mtl\no ball0\nv ",
+                       0),
+            0u)
+      << text.substr(0, 120);
+}
+
+TEST(ObjSequenceWriter, BodyWithoutUvsWritesPositionNormalFaces) {
+  SceneSetup setup;
+  BodySetup body;
+  body.name = "plain";
+  body.mesh = makeIcosphere(1, 1.0f);
+  body.mesh.uvs.clear();
+  setup.bodies.push_back(body);
+  const World world = buildWorld(setup);
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "plain");
+  writer.write(deformedFrame(world, 1));
+
+  const std::string text = readFile(writer.framePath(1));
+  EXPECT_EQ(text.find("vt "), std::string::npos);
+  const ParsedObj obj = parseObj(text);
+  ASSERT_EQ(obj.faces.size(), world.triangles.size());
+  for (const auto& face : obj.faces)
+    for (const auto& corner : face) {
+      EXPECT_EQ(corner[1], 0);
+      EXPECT_EQ(corner[0], corner[2]);
+    }
+  EXPECT_NE(text.find(cat(" ", obj.faces[0][0][0], "//", obj.faces[0][0][0])), std::string::npos);
+
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(writer.framePath(1).string(), aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  ASSERT_EQ(scene->mNumMeshes, 1u);
+  EXPECT_EQ(scene->mMeshes[0]->mNumFaces, world.bodies[0].triangleCount);
+  EXPECT_FALSE(scene->mMeshes[0]->HasTextureCoords(0));
+  EXPECT_TRUE(scene->mMeshes[0]->HasNormals());
+}
+
+TEST(ObjSequenceWriter, NamesFilesByPaddedFrameNumber) {
+  const World world = makeBallsWorld({1.0f});
+  ScratchDirectory dir;
+  ObjSequenceWriter four(world, dir.path(), "balls");
+  EXPECT_EQ(four.framePath(1), dir.path() / "obj" / "balls_0001.obj");
+  EXPECT_EQ(four.framePath(240), dir.path() / "obj" / "balls_0240.obj");
+  EXPECT_EQ(four.framePath(12345), dir.path() / "obj" / "balls_12345.obj");
+  EXPECT_EQ(four.materialLibraryPath(), dir.path() / "obj" / "balls.mtl");
+  const OutputSequence sequence = four.sequence();
+  EXPECT_EQ(sequence.format, "obj");
+  EXPECT_EQ(sequence.pattern, "obj/balls_####.obj");
+  EXPECT_EQ(sequence.printfPattern, "obj/balls_%04d.obj");
+  EXPECT_EQ(sequence.files, std::vector<std::string>{"obj/balls.mtl"});
+
+  ObjSequenceWriter six(world, dir.path(), "balls", 6);
+  EXPECT_EQ(six.framePath(7), dir.path() / "obj" / "balls_000007.obj");
+  EXPECT_EQ(six.sequence().printfPattern, "obj/balls_%06d.obj");
+
+  EXPECT_THROW(ObjSequenceWriter(world, dir.path(), "balls", 0), Error);
+  EXPECT_THROW(ObjSequenceWriter(world, dir.path(), "a/b"), Error);
+  EXPECT_THROW(ObjSequenceWriter(world, dir.path(), ""), Error);
+  EXPECT_THROW(ObjSequenceWriter(world, dir.path(), "my scene"), Error);
+}
+
+TEST(ObjSequenceWriter, MaterialLibraryHasADistinctColourPerBody) {
+  const World world = makeBallsWorld({1.0f, 0.8f, 0.6f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  std::istringstream lines(readFile(writer.materialLibraryPath()));
+  std::vector<std::string> materials;
+  std::set<std::string> colours;
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("newmtl ", 0) == 0) materials.push_back(line.substr(7));
+    if (line.rfind("Kd ", 0) == 0) colours.insert(line);
+  }
+  EXPECT_EQ(materials, (std::vector<std::string>{"ball0", "ball1", "ball2"}));
+  EXPECT_EQ(colours.size(), 3u);
+
+  Assimp::Importer importer;
+  writer.write(deformedFrame(world, 1));
+  const aiScene* scene = importer.ReadFile(writer.framePath(1).string(), aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    aiColor3D kd;
+    scene->mMaterials[scene->mMeshes[m]->mMaterialIndex]->Get(AI_MATKEY_COLOR_DIFFUSE, kd);
+    EXPECT_GT(kd.r + kd.g + kd.b, 0.5f) << "material library not read";
+  }
+}
+
+TEST(ObjSequenceWriter, ObjectNamesHaveNoSpacesAndAreUnique) {
+  SceneSetup setup;
+  for (int i = 0; i < 2; ++i) {
+    BodySetup body;
+    body.name = "red ball";
+    body.mesh = makeIcosphere(1, 1.0f, Vec3f(3.0f * float(i), 0, 0));
+    setup.bodies.push_back(body);
+  }
+  const World world = buildWorld(setup);
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  writer.write(deformedFrame(world, 1));
+  const ParsedObj obj = parseObj(readFile(writer.framePath(1)));
+  EXPECT_EQ(obj.objects, (std::vector<std::string>{"red_ball", "red_ball_2"}));
+  EXPECT_EQ(obj.materials, obj.objects);
+}
+
+TEST(ObjSequenceWriter, OutlivesTheWorld) {
+  ScratchDirectory dir;
+  Frame frame;
+  std::unique_ptr<ObjSequenceWriter> writer;
+  std::string expected;
+  {
+    const World world = makeBallsWorld({1.0f, 0.5f});
+    frame = deformedFrame(world, 1);
+    writer = std::make_unique<ObjSequenceWriter>(world, dir.path(), "balls");
+    ScratchDirectory other;
+    ObjSequenceWriter reference(world, other.path(), "balls");
+    reference.write(frame);
+    expected = readFile(reference.framePath(1));
+  }
+  writer->write(frame);
+  EXPECT_EQ(readFile(writer->framePath(1)), expected);
+}
+
+TEST(ObjSequenceWriter, NonFinitePositionIsRefusedNamingBodyAndFrame) {
+  const World world = makeBallsWorld({1.0f, 0.5f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  for (Scalar bad :
+       {std::numeric_limits<Scalar>::quiet_NaN(), std::numeric_limits<Scalar>::infinity()}) {
+    Frame frame = deformedFrame(world, 7);
+    frame.positions[world.bodies[1].firstParticle + 5].y() = bad;
+    try {
+      writer.write(frame);
+      FAIL() << "expected softbake::Error";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("frame 7"), std::string::npos) << message;
+      EXPECT_NE(message.find("'ball1'"), std::string::npos) << message;
+    }
+  }
+  EXPECT_EQ(listDirectory(dir.path() / "obj"), std::vector<std::string>{"balls.mtl"});
+}
+
+TEST(ObjSequenceWriter, FailedWriteLeavesNoFileAndNamesIt) {
+  const World world = makeBallsWorld({1.0f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  std::filesystem::create_directory(writer.framePath(2));
+  writer.write(deformedFrame(world, 1));
+  try {
+    writer.write(deformedFrame(world, 2));
+    FAIL() << "expected softbake::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(writer.framePath(2).string()), std::string::npos);
+  }
+  EXPECT_EQ(listDirectory(dir.path() / "obj"),
+            (std::vector<std::string>{"balls.mtl", "balls_0001.obj", "balls_0002.obj"}));
+  EXPECT_TRUE(std::filesystem::is_directory(writer.framePath(2)));
+}
+
+TEST(ObjSequenceWriter, CountsTheBytesItWrote) {
+  const World world = makeBallsWorld({1.0f, 0.5f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  for (int n = 1; n <= 3; ++n) writer.write(deformedFrame(world, n));
+  std::uint64_t onDisk = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path() / "obj"))
+    onDisk += entry.file_size();
+  EXPECT_EQ(writer.bytesWritten(), onDisk);
+}
+
+TEST(ObjSequenceWriter, WrongParticleCountIsAnError) {
+  const World world = makeBallsWorld({1.0f});
+  ScratchDirectory dir;
+  ObjSequenceWriter writer(world, dir.path(), "balls");
+  Frame frame = deformedFrame(world, 1);
+  frame.positions.pop_back();
+  EXPECT_THROW(writer.write(frame), Error);
+}
+
+}  // namespace
+}  // namespace softbake
