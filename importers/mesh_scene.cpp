@@ -32,7 +32,7 @@ SceneFile sceneFromMeshFile(const std::filesystem::path& path) {
   ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false});
   SceneFile scene;
   scene.notes = std::move(imported.notes);
-  scene.setup.name = path.stem().string();
+  scene.setup.name = fileSafeSceneName(path.stem().string());
   scene.setup.settings = SimulationSettings();
   scene.setup.settings.fps = 24;
   scene.setup.settings.frames = 240;

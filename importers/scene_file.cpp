@@ -46,6 +46,14 @@ std::string nonEmptyString(const JsonValue& value) {
   return text;
 }
 
+// The scene name becomes every output file's stem and the OBJ `mtllib` argument.
+std::string sceneName(const JsonValue& value) {
+  std::string text = nonEmptyString(value);
+  if (text != fileSafeSceneName(text))
+    value.fail(cat("'", text, "' cannot name output files: use no '/', '\\' or whitespace"));
+  return text;
+}
+
 class SceneParser {
  public:
   SceneParser(std::string_view source, const std::filesystem::path& baseDirectory)
@@ -54,8 +62,8 @@ class SceneParser {
   SceneFile parse(const nlohmann::json& json) {
     const JsonObject root =
         JsonValue(json, source_, "").object({"name", "settings", "bodies", "colliders", "output"});
-    scene_.setup.name = std::filesystem::path(source_).stem().string();
-    if (auto name = root.find("name")) scene_.setup.name = nonEmptyString(*name);
+    scene_.setup.name = fileSafeSceneName(std::filesystem::path(source_).stem().string());
+    if (auto name = root.find("name")) scene_.setup.name = sceneName(*name);
     if (auto settings = root.find("settings")) parseSettings(*settings);
 
     const JsonValue bodies = root.at("bodies");
@@ -303,6 +311,12 @@ SceneFile parseScene(const nlohmann::json& json, std::string_view source,
 SceneFile loadSceneFile(const std::filesystem::path& path) {
   const nlohmann::json json = readJsonFile(path);
   return parseScene(json, path.string(), path.parent_path());
+}
+
+std::string fileSafeSceneName(std::string name) {
+  for (char& c : name)
+    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) <= ' ') c = '_';
+  return name.empty() ? std::string("scene") : name;
 }
 
 }  // namespace softbake

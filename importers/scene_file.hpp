@@ -46,4 +46,8 @@ SceneFile defaultScene();
 /// about a metre when far from it (noted), dropped from above a ground plane.
 SceneFile sceneFromMeshFile(const std::filesystem::path& path);
 
+/// `name` with every '/', '\\' and whitespace replaced by '_', so it can be a file stem and an OBJ
+/// `mtllib` argument ("my ball.fbx" gives the scene "my_ball").
+std::string fileSafeSceneName(std::string name);
+
 }  // namespace softbake

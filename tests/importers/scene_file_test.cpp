@@ -269,8 +269,8 @@ TEST(SceneFile, MeshPathsAreRelativeToTheSceneFile) {
   EXPECT_EQ(weldByPosition(ball.mesh.positions, ball.mesh.triangles).positions.size(), 642u);
   Eigen::AlignedBox3f bounds, original;
   for (const Vec3f& p : ball.mesh.positions) bounds.extend(p);
-  for (const Vec3f& p : importMeshFile(test::sharedMeshes() / "ico4.obj").meshes.at(0).positions)
-    original.extend(p);
+  const ImportedMeshes source = importMeshFile(test::sharedMeshes() / "ico4.obj");
+  for (const Vec3f& p : source.meshes.at(0).positions) original.extend(p);
   EXPECT_TRUE(bounds.center().isApprox(original.center() + Vec3f(0, 3, 0), 1e-5f));
   ASSERT_EQ(scene.setup.staticMeshes.size(), 1u);  // an absolute path works as well
   EXPECT_EQ(scene.setup.staticMeshes[0].mesh.triangles.size(), 768u);

@@ -1,0 +1,242 @@
+/// Times every stage of one substep separately, and the whole Simulator::step, on icosphere
+/// scenes of about 1k, 10k, 100k and 1M faces at 1 and 2 TBB threads.
+///
+/// Built twice: core_stages_bench against the float core and core_stages_bench_double against
+/// softbake_core_double, so the two programs time the same code with Scalar = float and double.
+/// Arguments are {faces, threads}; items/s counts faces. How to run: bench/results/README.md.
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/forces.hpp"
+#include "core/icosphere.hpp"
+#include "core/integrator.hpp"
+#include "core/material.hpp"
+#include "core/plane_contact.hpp"
+#include "core/simulator.hpp"
+#include "core/world.hpp"
+
+namespace softbake {
+namespace {
+
+/// A scene of `balls` icospheres of `subdivisions` levels: 20·4^subdivisions faces each.
+struct SceneSize {
+  int faces, subdivisions, balls;
+};
+
+constexpr SceneSize kSizes[] = {
+    {1280, 3, 1},     // ~1k
+    {10240, 4, 2},    // ~10k
+    {102400, 5, 5},   // ~100k
+    {983040, 6, 12},  // ~1M
+};
+
+/// Substeps run before timing, so springs are stretched, the gas is pressed and the balls rest
+/// on the ground: the stages then see a state from a real run, not the rest shape.
+constexpr int kWarmUpSubsteps = 8;
+
+/// The stages that change the particle state are put back to their starting state this often
+/// (with the timer paused), so the state stays one a real run could reach.
+constexpr int kRestorePeriod = 64;
+
+/// Rubber balls of radius 0.5 m on a grid, 2 cm into the ground plane: about 2% of the particles
+/// are in contact from the first substep on.
+SceneSetup ballsScene(const SceneSize& size) {
+  const std::optional<Material> rubber = findMaterialPreset("rubber");
+  if (!rubber) throw std::runtime_error("no 'rubber' material preset");
+  SceneSetup scene;
+  scene.name = "bench";
+  constexpr float kRadius = 0.5f, kSpacing = 1.2f;
+  for (int i = 0; i < size.balls; ++i) {
+    BodySetup body;
+    body.name = "ball" + std::to_string(i);
+    body.mesh =
+        makeIcosphere(size.subdivisions, kRadius,
+                      Vec3f(kSpacing * float(i % 4), kRadius - 0.02f, kSpacing * float(i / 4)));
+    body.material = *rubber;
+    body.mass = 1;
+    scene.bodies.push_back(std::move(body));
+  }
+  scene.planes.push_back(PlaneCollider{});
+  return scene;
+}
+
+/// The warmed-up simulator of each size, built once per process and copied by each benchmark.
+const Simulator& preparedSimulator(int faces) {
+  static std::map<int, Simulator> cache;
+  if (auto it = cache.find(faces); it != cache.end()) return it->second;
+  for (const SceneSize& size : kSizes) {
+    if (size.faces != faces) continue;
+    Simulator simulator(buildWorld(ballsScene(size)));
+    if (simulator.world().triangles.size() != std::size_t(faces))
+      throw std::runtime_error("scene has " + std::to_string(simulator.world().triangles.size()) +
+                               " faces, not " + std::to_string(faces));
+    for (int s = 0; s < kWarmUpSubsteps; ++s) simulator.step(1);
+    return cache.emplace(faces, std::move(simulator)).first->second;
+  }
+  throw std::runtime_error("no scene of " + std::to_string(faces) + " faces");
+}
+
+void setCounters(benchmark::State& state, const World& world) {
+  state.SetItemsProcessed(state.iterations() * std::int64_t(world.triangles.size()));
+  state.counters["faces"] = double(world.triangles.size());
+  state.counters["particles"] = double(world.particleCount());
+  state.counters["springs"] = double(world.springs.size());
+}
+
+/// Copies the prepared simulator of the benchmark's size under a TBB limit of range(1) threads;
+/// the limit lasts as long as this object.
+struct StageRun {
+  explicit StageRun(const benchmark::State& state)
+      : threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1))),
+        simulator(preparedSimulator(int(state.range(0)))) {}
+  World& world() { return simulator.world(); }
+
+  tbb::global_control threads;
+  Simulator simulator;
+};
+
+/// The particle state integrate() and resolvePlaneContacts() change.
+struct ParticleState {
+  std::vector<Vec3> position, previousPosition, velocity;
+  explicit ParticleState(const World& world)
+      : position(world.position),
+        previousPosition(world.previousPosition),
+        velocity(world.velocity) {}
+  void restore(World& world) const {
+    world.position = position;
+    world.previousPosition = previousPosition;
+    world.velocity = velocity;
+  }
+};
+
+void BM_SpringForces(benchmark::State& state) {
+  StageRun run(state);
+  for (auto _ : state) {
+    computeSpringForces(run.world());
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, run.world());
+}
+
+void BM_Volumes(benchmark::State& state) {
+  StageRun run(state);
+  for (auto _ : state) {
+    computeVolumes(run.world());
+    benchmark::DoNotOptimize(run.world().bodyVolume.data());
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, run.world());
+}
+
+void BM_PressureForces(benchmark::State& state) {
+  StageRun run(state);
+  computeVolumes(run.world());
+  for (auto _ : state) {
+    computePressureForces(run.world());
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, run.world());
+}
+
+void BM_Integrate(benchmark::State& state) {
+  StageRun run(state);
+  World& world = run.world();
+  const Scalar dt = Scalar(run.simulator.substeps().timeStep);
+  computeSpringForces(world);
+  computeVolumes(world);
+  computePressureForces(world);
+  const ParticleState start(world);
+  int sinceRestore = 0;
+  for (auto _ : state) {
+    if (++sinceRestore == kRestorePeriod) {
+      state.PauseTiming();
+      start.restore(world);
+      sinceRestore = 0;
+      state.ResumeTiming();
+    }
+    benchmark::DoNotOptimize(integrate(world, dt));
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, world);
+}
+
+/// Every call sees the state integrate() leaves: the particles in contact are put back before
+/// each call (timed; they are ~2% of the particles), the others were never moved.
+void BM_PlaneContacts(benchmark::State& state) {
+  StageRun run(state);
+  World& world = run.world();
+  computeSpringForces(world);
+  computeVolumes(world);
+  computePressureForces(world);
+  integrate(world, Scalar(run.simulator.substeps().timeStep));
+  const ParticleState start(world);
+  std::vector<Index> touched;
+  for (Index i = 0; i < world.particleCount(); ++i)
+    for (const PlaneCollider& plane : world.planes)
+      if (plane.normal.dot(world.position[i] - plane.point) < world.settings.skin) {
+        touched.push_back(i);
+        break;
+      }
+  std::size_t contacts = 0;
+  for (auto _ : state) {
+    for (Index i : touched) {
+      world.position[i] = start.position[i];
+      world.velocity[i] = start.velocity[i];
+    }
+    contacts += resolvePlaneContacts(world);
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, world);
+  state.counters["contacts"] =
+      state.iterations() ? double(contacts) / double(state.iterations()) : 0.0;
+}
+
+void BM_Step(benchmark::State& state) {
+  StageRun run(state);
+  try {
+    for (auto _ : state) run.simulator.step(1);
+  } catch (const Error& error) {
+    state.SkipWithError(error.what());
+  }
+  setCounters(state, run.world());
+}
+
+void sizesAndThreads(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"faces", "threads"});
+  for (const SceneSize& size : kSizes)
+    for (int threads : {1, 2}) b->Args({size.faces, threads});
+  b->UseRealTime()->Unit(benchmark::kMicrosecond);
+  // On a shared machine the fastest repetition is the one least disturbed by other work.
+  b->ComputeStatistics(
+      "min", [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); });
+}
+
+BENCHMARK(BM_SpringForces)->Apply(sizesAndThreads);
+BENCHMARK(BM_Volumes)->Apply(sizesAndThreads);
+BENCHMARK(BM_PressureForces)->Apply(sizesAndThreads);
+BENCHMARK(BM_Integrate)->Apply(sizesAndThreads);
+BENCHMARK(BM_PlaneContacts)->Apply(sizesAndThreads);
+BENCHMARK(BM_Step)->Apply(sizesAndThreads);
+
+}  // namespace
+}  // namespace softbake
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::AddCustomContext("scalar", sizeof(softbake::Scalar) == 8 ? "double" : "float");
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,51 @@
+// The softbake command.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "cli/run_command.hpp"
+
+#ifndef SOFTBAKE_VERSION
+#define SOFTBAKE_VERSION "unknown"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App app{"softbake " SOFTBAKE_VERSION
+               " - offline soft-body simulation (Matyka-Ollila pressure bodies, Mesit-Guha "
+               "collisions) with OBJ sequence output",
+               "softbake"};
+  app.set_version_flag("--version", std::string("softbake ") + SOFTBAKE_VERSION);
+  app.require_subcommand(1);
+
+  softbake::RunOptions run;
+  CLI::App* runApp = app.add_subcommand(
+      "run",
+      "Simulate a scene and write its frames. INPUT is a scene .json, a mesh file (any "
+      "format assimp reads, dropped on the ground as a soft body), or nothing for the "
+      "built-in default scene.");
+  runApp->add_option("input", run.input, "scene .json or mesh file (default: built-in scene)");
+  runApp->add_option("-o,--out", run.out, "output folder")->capture_default_str();
+  runApp->add_option("--frames", run.frames, "number of frames to write")
+      ->check(CLI::Range(1, 10000000));
+  runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
+  runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
+      ->check([](const std::string& value) -> std::string {
+        if (value == "auto") return {};
+        try {
+          std::size_t used = 0;
+          const int count = std::stoi(value, &used);
+          if (used == value.size() && count >= 1) return {};
+        } catch (...) {
+        }
+        return "expected 'auto' or a whole number >= 1, got '" + value + "'";
+      });
+  runApp->add_option("--frame-padding", run.framePadding, "digits of the frame number in names")
+      ->check(CLI::Range(1, 9));
+  runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
+      ->check(CLI::Range(0, 4096));
+  runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
+
+  CLI11_PARSE(app, argc, argv);
+  if (runApp->parsed()) return softbake::runCommand(run);
+  return 0;
+}

@@ -1,0 +1,25 @@
+#pragma once
+/// `softbake run`: load a scene (or a mesh, or the built-in default), simulate it, and write the
+/// frame sequences while the simulation goes on.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace softbake {
+
+struct RunOptions {
+  std::string input;  ///< scene .json, a mesh file, or empty for the built-in default scene
+  std::filesystem::path out = "out";
+  std::optional<int> frames;
+  std::optional<double> fps;
+  std::optional<std::string> substeps;  ///< "auto" or a count
+  std::optional<int> framePadding;
+  int threads = 0;  ///< 0: all cores
+  bool quiet = false;
+};
+
+/// Runs the job; returns the process exit code. Errors are printed, never thrown.
+int runCommand(const RunOptions& options);
+
+}  // namespace softbake

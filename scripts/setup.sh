@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Brings a Debian 12 machine to a built softbake: installs the Debian packages that are missing,
+# configures and builds (Release, ./build). Safe to run again; it only does what is left to do.
+#   SOFTBAKE_BUILD_DIR   build folder (default: build)
+#   SOFTBAKE_CMAKE_ARGS  extra arguments for the CMake configure step
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+packages=(
+  g++ make cmake pkg-config            # a fresh Debian has no compiler; cmake only recommends make
+  libeigen3-dev libtbb-dev             # core
+  libassimp-dev nlohmann-json3-dev     # importers
+  libopenvdb-dev libboost-iostreams-dev  # exporters (Debian's FindOpenVDB needs boost-iostreams)
+  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libstb-dev  # render: EGL on Mesa's llvmpipe
+  libcli11-dev                         # cli
+  libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+)
+missing=()
+for package in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+    missing+=("$package")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup: run as root or install sudo" >&2; exit 1; }
+    sudo=sudo
+  fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+fi
+
+build_dir=${SOFTBAKE_BUILD_DIR:-build}
+[ -f "$build_dir/CMakeCache.txt" ] || echo "setup: configuring and building in $build_dir (the first build takes a few minutes)" >&2
+# shellcheck disable=SC2086  # the extra arguments are meant to split
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release ${SOFTBAKE_CMAKE_ARGS:-} >/dev/null
+cmake --build "$build_dir" -j"$(nproc)"

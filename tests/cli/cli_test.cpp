@@ -1,0 +1,222 @@
+// The `softbake` command end to end, run in a child process like a user or a pipeline would run
+// it: what it prints, how it exits, and what it leaves on disk.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int exitCode = -1;  // -1: killed by a signal
+  std::string output;
+};
+
+std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+Result runSoftbake(const std::string& arguments) {
+  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
+  Result result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+    result.output.append(buffer, read);
+  const int status = pclose(pipe);
+  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+fs::path meshes() {
+  return SOFTBAKE_SHARED_MESHES_DIR;
+}
+
+#define SKIP_WITHOUT_SHARED_MESHES() \
+  if (!fs::is_directory(meshes())) GTEST_SKIP() << "shared meshes not found at " << meshes()
+fs::path examples() {
+  return fs::path(SOFTBAKE_SOURCE_DIR) / "examples";
+}
+
+/// A fresh folder per test under the system temp folder, removed afterwards.
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    folder_ = fs::temp_directory_path() / (std::string("softbake_cli_") + info->name());
+    fs::remove_all(folder_);
+    fs::create_directories(folder_);
+  }
+  void TearDown() override { fs::remove_all(folder_); }
+
+  fs::path writeScene(const std::string& name, const std::string& text) {
+    const fs::path path = folder_ / name;
+    std::ofstream(path) << text;
+    return path;
+  }
+
+  fs::path folder_;
+};
+
+}  // namespace
+
+TEST_F(CliTest, DefaultSceneWritesFramesAndManifestAndSaysWhere) {
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run --frames 3 -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  for (const char* name : {"obj/default_0001.obj", "obj/default_0002.obj", "obj/default_0003.obj",
+                           "obj/default.mtl", "manifest.json"})
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  EXPECT_FALSE(fs::exists(out / "obj/default_0004.obj"));
+  EXPECT_NE(run.output.find((out / "obj/default_####.obj").string()), std::string::npos)
+      << run.output;
+  const nlohmann::json manifest = nlohmann::json::parse(readFile(out / "manifest.json"));
+  EXPECT_EQ(manifest.at("frames").get<int>(), 3);
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(out))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST_F(CliTest, ALongerRunThenAShorterOneLeavesOneConsistentSequence) {
+  const fs::path out = folder_ / "out";
+  ASSERT_EQ(runSoftbake("run --frames 5 -q -o " + quoted(out.string())).exitCode, 0);
+  ASSERT_EQ(runSoftbake("run --frames 2 -q -o " + quoted(out.string())).exitCode, 0);
+  EXPECT_TRUE(fs::exists(out / "obj/default_0002.obj"));
+  EXPECT_FALSE(fs::exists(out / "obj/default_0003.obj"));
+}
+
+TEST_F(CliTest, OutputIsByteIdenticalForOneAndTwoThreads) {
+  const fs::path one = folder_ / "one", two = folder_ / "two";
+  ASSERT_EQ(runSoftbake("run --frames 12 -q -j 1 -o " + quoted(one.string())).exitCode, 0);
+  ASSERT_EQ(runSoftbake("run --frames 12 -q -j 2 -o " + quoted(two.string())).exitCode, 0);
+  for (const char* frame : {"obj/default_0002.obj", "obj/default_0012.obj"}) {
+    const std::string a = readFile(one / frame), b = readFile(two / frame);
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << frame << " differs between 1 and 2 threads";
+  }
+}
+
+TEST_F(CliTest, AMeshFileRunsAsASoftBodyNamedAfterTheFile) {
+  SKIP_WITHOUT_SHARED_MESHES();
+  const fs::path source = folder_ / "my ball.off";  // a space: the scene name must be made safe
+  fs::copy_file(meshes() / "ballA.off", source);
+  const fs::path out = folder_ / "out";
+  const Result run =
+      runSoftbake("run " + quoted(source.string()) + " --frames 2 -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_TRUE(fs::exists(out / "obj/my_ball_0002.obj")) << run.output;
+}
+
+TEST_F(CliTest, MissingInputIsAnErrorNamingTheFile) {
+  const Result run =
+      runSoftbake("run /nonexistent/scene.json -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 1);
+  EXPECT_NE(run.output.find("/nonexistent/scene.json"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("error"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(folder_ / "o")) << "nothing is written for bad input";
+}
+
+TEST_F(CliTest, WrongTypeInASceneNamesTheKeyPath) {
+  const fs::path scene = writeScene("bad.json", R"({
+    "bodies": [{"mesh": {"primitive": "icosphere"}, "material": {"stiffness": "hard"}}]
+  })");
+  const Result run =
+      runSoftbake("run " + quoted(scene.string()) + " -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 1);
+  EXPECT_NE(run.output.find("bodies[0].material.stiffness"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("bad.json"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(folder_ / "o"));
+}
+
+TEST_F(CliTest, ASceneNameThatCannotNameFilesIsRefused) {
+  const fs::path scene = writeScene("named.json", R"({
+    "name": "my scene", "bodies": [{"mesh": {"primitive": "icosphere"}}]
+  })");
+  const Result run =
+      runSoftbake("run " + quoted(scene.string()) + " -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 1);
+  EXPECT_NE(run.output.find("name"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(folder_ / "o"));
+}
+
+TEST_F(CliTest, EmptyMeshFileIsAnErrorNotACrash) {
+  SKIP_WITHOUT_SHARED_MESHES();
+  const Result run = runSoftbake("run " + quoted((meshes() / "broken/empty.obj").string()) +
+                                 " -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("empty.obj"), std::string::npos) << run.output;
+}
+
+TEST_F(CliTest, PlyThatCrashesAssimpIsRefusedWithAMessage) {
+  SKIP_WITHOUT_SHARED_MESHES();
+  const fs::path crash = meshes() / "broken/crash-30d6d0f7c529b3b66b4131700b7a4580cd7082df.ply";
+  ASSERT_TRUE(fs::exists(crash));
+  const Result run =
+      runSoftbake("run " + quoted(crash.string()) + " -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 1) << "exit code -1 means it died of a signal:\n" << run.output;
+  EXPECT_NE(run.output.find("crash-30d6d0f7"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(folder_ / "o"));
+}
+
+TEST_F(CliTest, BadOptionValuesAreRefused) {
+  EXPECT_NE(runSoftbake("run --substeps zero").exitCode, 0);
+  EXPECT_NE(runSoftbake("run --frames 0").exitCode, 0);
+  EXPECT_NE(runSoftbake("frobnicate").exitCode, 0);
+}
+
+TEST_F(CliTest, TooFewExplicitSubstepsWarnsWithTheBound) {
+  const Result run =
+      runSoftbake("run --frames 1 --substeps 1 -q -o " + quoted((folder_ / "o").string()));
+  EXPECT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("stability bound"), std::string::npos) << run.output;
+}
+
+TEST_F(CliTest, TooFewSubstepsBlowsUpWithAClearErrorAndNoNaNInAnyFile) {
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run --frames 48 --substeps 1 -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("substeps"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("frame"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(out / "manifest.json")) << "a failed run must not look complete";
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(out)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string text = readFile(entry.path());
+    EXPECT_EQ(text.find("nan"), std::string::npos) << entry.path();
+    EXPECT_EQ(text.find("inf"), std::string::npos) << entry.path();
+  }
+}
+
+TEST_F(CliTest, EveryExampleSceneLoadsAndRunsAFewFrames) {
+  int count = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(examples())) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    const fs::path out = folder_ / entry.path().stem();
+    const Result run = runSoftbake("run " + quoted(entry.path().string()) + " --frames 3 -q -o " +
+                                   quoted(out.string()));
+    EXPECT_EQ(run.exitCode, 0) << entry.path() << "\n" << run.output;
+    EXPECT_TRUE(fs::exists(out / "manifest.json")) << entry.path();
+  }
+  EXPECT_GE(count, 4);
+}
+
+TEST(Version, PrintsTheVersion) {
+  const Result run = runSoftbake("--version");
+  EXPECT_EQ(run.exitCode, 0);
+  EXPECT_EQ(run.output.rfind("softbake ", 0), 0u) << run.output;
+}
