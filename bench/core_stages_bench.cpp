@@ -99,7 +99,7 @@ void setCounters(benchmark::State& state, const World& world) {
 struct StageRun {
   explicit StageRun(const benchmark::State& state)
       : threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1))),
-        simulator(preparedSimulator(int(state.range(0)))) {}
+        simulator(World(preparedSimulator(int(state.range(0))).world())) {}
   World& world() { return simulator.world(); }
 
   tbb::global_control threads;

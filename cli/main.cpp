@@ -41,6 +41,22 @@ int main(int argc, char** argv) {
       });
   runApp->add_option("--frame-padding", run.framePadding, "digits of the frame number in names")
       ->check(CLI::Range(1, 9));
+  runApp
+      ->add_option("--broadphase", run.broadPhase,
+                   "collision broad phase: sbhash (the paper's subdivided boxes and box hash), "
+                   "spatialhash, bvh or brute")
+      ->check(CLI::IsMember({"sbhash", "spatialhash", "bvh", "brute"}));
+  runApp->add_option("--levels", run.levels, "subdivision level of the sbhash boxes")
+      ->check(CLI::Range(0, 8));
+  runApp
+      ->add_option("--response", run.response,
+                   "collision response: two-sided (momentum-conserving), paper (only the "
+                   "particle moves) or none")
+      ->check(CLI::IsMember({"two-sided", "paper", "none"}));
+  runApp->add_flag("--no-response", run.noResponse,
+                   "detect contacts but do not respond (the paper's figure 5b)");
+  runApp->add_flag("--contacts", run.contacts,
+                   "write each frame's contacts to OUT/contacts/<scene>_0001.json ...");
   runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
+#include "exporters/contact_writer.hpp"
 #include "exporters/frame_pipeline.hpp"
 #include "exporters/manifest.hpp"
 #include "exporters/obj_sequence_writer.hpp"
@@ -41,6 +42,16 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
   if (options.substeps)
     settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
   if (options.framePadding) scene.output.framePadding = *options.framePadding;
+  CollisionSettings& collisions = settings.collisions;
+  if (options.broadPhase && !parseBroadPhase(*options.broadPhase, collisions.broadPhase))
+    throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '",
+                    *options.broadPhase, "'"));
+  if (options.response && !parseResponseMode(*options.response, collisions.response))
+    throw Error(
+        cat("--response: expected two-sided, paper or none, got '", *options.response, "'"));
+  if (options.noResponse) collisions.response = ResponseMode::None;
+  if (options.levels) collisions.subdivisionLevels = *options.levels;
+  if (options.contacts) scene.output.contacts = true;
 }
 
 void describeSubsteps(const SubstepChoice& choice) {
@@ -88,12 +99,6 @@ int run(const RunOptions& options) {
   Simulator simulator(buildWorld(scene.setup, &report));
   for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
   const World& world = simulator.world();
-  if (world.bodies.size() > 1)
-    std::printf(
-        "note: collisions between soft bodies are not in this version yet: bodies pass "
-        "through each other\n");
-  if (!world.staticMeshes.empty())
-    std::printf("note: static mesh colliders are loaded but not collided with in this version\n");
   const std::string& name = scene.setup.name;
   std::size_t triangles = 0;
   for (const Body& body : world.bodies) triangles += body.triangleCount;
@@ -102,6 +107,16 @@ int run(const RunOptions& options) {
       name.c_str(), world.bodies.size(), world.particleCount(), triangles, world.springs.size(),
       world.settings.frames, world.settings.fps);
   describeSubsteps(simulator.substeps());
+  const CollisionSettings& collisions = world.settings.collisions;
+  if (simulator.collides())
+    std::printf("collisions: %s broad phase%s, %s response\n",
+                std::string(broadPhaseName(collisions.broadPhase)).c_str(),
+                collisions.broadPhase == BroadPhaseKind::BoxHash
+                    ? cat(" (level ", collisions.subdivisionLevels, ")").c_str()
+                    : "",
+                std::string(responseModeName(collisions.response)).c_str());
+  else if (collisions.response == ResponseMode::None)
+    std::printf("collisions: detection only, no response\n");
 
   // Everything above validated the input: only now is anything written.
   fs::create_directories(options.out);
@@ -116,16 +131,33 @@ int run(const RunOptions& options) {
     manifest.sequences.push_back(obj->sequence());
     sinks.push_back(std::move(obj));
   }
+  if (scene.output.contacts) {
+    removeStaleFrames(options.out / "contacts", name, ".json");
+    auto contacts =
+        std::make_unique<ContactWriter>(world, options.out, name, scene.output.framePadding);
+    manifest.sequences.push_back(contacts->sequence());
+    sinks.push_back(std::move(contacts));
+  }
   FramePipeline pipeline(std::move(sinks), world.particleCount());
 
   std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
   ProgressDisplay progress(frames, options.quiet);
+  StepStats totals;
   for (int frame = 1; frame <= frames; ++frame) {
-    if (frame > 1) simulator.advanceToFrame(frame);
+    if (frame > 1) {
+      simulator.advanceToFrame(frame);
+      const StepStats& stats = simulator.lastFrameStats();
+      totals.contacts += stats.contacts;
+      totals.planeContacts += stats.planeContacts;
+      totals.responses.particleResponses += stats.responses.particleResponses;
+      totals.responses.cornerResponses += stats.responses.cornerResponses;
+      totals.responses.edgePushes += stats.responses.edgePushes;
+    }
     Frame& out = pipeline.acquire();
     out.number = frame;
     out.time = (frame - 1) / world.settings.fps;
     std::copy(world.position.begin(), world.position.end(), out.positions.begin());
+    out.contacts = simulator.contacts();
     pipeline.submit(out);
     progress.update(frame);
   }
@@ -139,6 +171,12 @@ int run(const RunOptions& options) {
   std::printf("wrote %d frames (%s) to %s in %.2f s: %.0f steps, %.0f steps/s\n", frames,
               formatBytes(pipeline.bytesWritten()).c_str(), options.out.string().c_str(), seconds,
               steps, seconds > 0 ? steps / seconds : 0.0);
+  if (simulator.collides())
+    std::printf(
+        "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "
+        "plane contacts %zu\n",
+        totals.contacts, totals.responses.particleResponses, totals.responses.cornerResponses,
+        totals.responses.edgePushes, totals.planeContacts);
   for (const OutputSequence& sequence : manifest.sequences)
     std::printf("%s sequence: %s\n", sequence.format.c_str(),
                 (options.out / sequence.pattern).string().c_str());

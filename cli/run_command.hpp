@@ -15,7 +15,12 @@ struct RunOptions {
   std::optional<double> fps;
   std::optional<std::string> substeps;  ///< "auto" or a count
   std::optional<int> framePadding;
-  int threads = 0;  ///< 0: all cores
+  std::optional<std::string> broadPhase;  ///< "sbhash", "spatialhash", "bvh", "brute"
+  std::optional<std::string> response;    ///< "two-sided", "paper", "none"
+  std::optional<int> levels;              ///< sbhash subdivision level
+  bool noResponse = false;                ///< detection only: --response none
+  bool contacts = false;                  ///< write OUT/contacts/<scene>_0001.json …
+  int threads = 0;                        ///< 0: all cores
   bool quiet = false;
 };
 

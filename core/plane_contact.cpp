@@ -11,10 +11,12 @@ namespace softbake {
 namespace {
 constexpr std::size_t kParticleGrain = 2048;
 
-/// Returns true when the particle was moved.
-bool respond(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x, Vec3& v) {
+/// Returns true when the particle touches the plane (and, with `move`, was moved).
+bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x, Vec3& v,
+                    bool move) {
   const Scalar endDistance = plane.normal.dot(x - plane.point);
   if (endDistance >= skin) return false;
+  if (!move) return endDistance < 0;
   const Scalar startDistance = plane.normal.dot(start - plane.point);
   if (startDistance > 0 && endDistance < 0) {
     // Crossed during the step: the intersection point of the segment, as the paper does.
@@ -35,7 +37,7 @@ bool respond(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x
 }
 }  // namespace
 
-std::size_t resolvePlaneContacts(World& world) {
+std::size_t resolvePlaneContacts(World& world, bool respond) {
   if (world.planes.empty()) return 0;
   const Scalar skin = world.settings.skin;
   return tbb::parallel_reduce(
@@ -44,8 +46,8 @@ std::size_t resolvePlaneContacts(World& world) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           if (world.inverseMass[i] == 0) continue;
           for (const PlaneCollider& plane : world.planes)
-            moved += respond(plane, skin, world.previousPosition[i], world.position[i],
-                             world.velocity[i]);
+            moved += respondToPlane(plane, skin, world.previousPosition[i], world.position[i],
+                                    world.velocity[i], respond);
         }
         return moved;
       },

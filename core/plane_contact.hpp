@@ -9,7 +9,8 @@ namespace softbake {
 /// For every particle whose motion this substep crossed a plane, or that ends closer than the skin:
 /// moves it to where its segment met the plane (or projects it), lifted by the skin along the
 /// normal; reflects the normal velocity with the plane's restitution and slows the tangential
-/// velocity by Coulomb friction. Returns the number of particles moved.
-std::size_t resolvePlaneContacts(World& world);
+/// velocity by Coulomb friction. Returns the number of particles in contact. With `respond`
+/// false (detection only, the paper's figure 5b) nothing is moved.
+std::size_t resolvePlaneContacts(World& world, bool respond = true);
 
 }  // namespace softbake

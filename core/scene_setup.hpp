@@ -2,8 +2,12 @@
 /// Everything needed to start a simulation, in memory and independent of any file format.
 /// importers/ fills it from a scene file; tests and the built-in scenes fill it directly.
 
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "core/broad_phase.hpp"
 
 #include "core/material.hpp"
 #include "core/triangle_mesh.hpp"
@@ -26,9 +30,12 @@ struct BodySetup {
   std::string name;
   TriangleMesh mesh;  ///< world space: the scene transform is already applied
   Material material;
-  Scalar mass = 1;  ///< kg for the whole body, spread over particles by vertex area
+  Scalar mass = 1;               ///< kg for the whole body, spread over particles by vertex area
   Vec3 velocity = Vec3::Zero();  ///< initial velocity of every particle, m/s
   Pins pins;
+  /// Collide the body with itself. Unset: on for open meshes (a flag can fold onto itself), off
+  /// for closed ones (pressure keeps them from folding, and the test costs a second pass).
+  std::optional<bool> selfCollision;
 };
 
 /// An infinite static plane; particles stay on the side its normal points to.
@@ -36,8 +43,8 @@ struct PlaneCollider {
   std::string name = "ground";
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitY();  ///< unit length
-  Scalar restitution = 0.2f;  ///< fraction of the normal speed kept on impact, 0..1
-  Scalar friction = 0.3f;     ///< Coulomb coefficient on the tangential speed
+  Scalar restitution = 0.2f;    ///< fraction of the normal speed kept on impact, 0..1
+  Scalar friction = 0.3f;       ///< Coulomb coefficient on the tangential speed
 };
 
 /// A static triangle mesh (the sphere of the paper's figure 6). It never moves.
@@ -45,6 +52,26 @@ struct StaticMeshCollider {
   std::string name;
   TriangleMesh mesh;  ///< world space
   Scalar restitution = 0.2f;
+  Scalar friction = 0.3f;
+};
+
+/// How the collision response of Mesit & Guha §2.4 acts.
+enum class ResponseMode {
+  TwoSided,  ///< both sides of a soft–soft contact move, weighted by mass: momentum is conserved
+  Paper,     ///< only the particle that crossed is moved, as the paper does
+  None,      ///< detection only: contacts are found and recorded, nothing moves (figure 5b)
+};
+
+/// "two-sided", "paper", "none".
+std::string_view responseModeName(ResponseMode mode);
+/// The mode a name gives, or false for an unknown name.
+bool parseResponseMode(std::string_view name, ResponseMode& mode);
+
+struct CollisionSettings {
+  BroadPhaseKind broadPhase = BroadPhaseKind::BoxHash;
+  int subdivisionLevels = 3;  ///< level L of the subdivided boxes (sbhash): 2^L leaves per axis
+  ResponseMode response = ResponseMode::TwoSided;
+  Scalar restitution = 0.2f;  ///< between soft bodies; static colliders carry their own
   Scalar friction = 0.3f;
 };
 
@@ -59,6 +86,7 @@ struct SimulationSettings {
   /// Distance particles are left outside a surface after a collision response, scene units.
   Scalar skin = Scalar(1e-3);
   std::string units = "m";  ///< recorded in the outputs; the simulation is unit-agnostic
+  CollisionSettings collisions;
 };
 
 struct SceneSetup {

@@ -6,6 +6,11 @@
 /// The collision stage sees each particle's segment previousPosition → position, which is what the
 /// line–triangle tests of §2.3 need. Nothing here allocates after construction.
 
+#include <vector>
+
+#include "core/collision_detection.hpp"
+#include "core/collision_response.hpp"
+#include "core/contact.hpp"
 #include "core/stability.hpp"
 #include "core/world.hpp"
 
@@ -13,7 +18,10 @@ namespace softbake {
 
 /// Counts from the latest frame, for progress display and benchmarks.
 struct StepStats {
-  std::size_t planeContacts = 0;  ///< particle–plane responses summed over the frame's substeps
+  std::size_t planeContacts = 0;     ///< particle–plane contacts summed over the frame's substeps
+  std::size_t candidatePairs = 0;    ///< broad-phase triangle pairs, summed over the substeps
+  std::size_t contacts = 0;          ///< soft and static mesh contacts, summed over the substeps
+  CollisionResponseStats responses;  ///< summed over the substeps
 };
 
 class Simulator {
@@ -25,6 +33,11 @@ class Simulator {
   World& world() { return world_; }
   const SubstepChoice& substeps() const { return substeps_; }
   const StepStats& lastFrameStats() const { return stats_; }
+  /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f.
+  const std::vector<Contact>& contacts() const { return contacts_; }
+  /// Whether the scene has anything the collision pipeline could find (two surfaces, or one
+  /// that self-collides); planes are handled on their own.
+  bool collides() const { return collides_; }
 
   /// One substep of `substeps().timeStep` seconds. Throws softbake::Error on a blow-up; `frame`
   /// (1-based, the frame being computed) goes into that message.
@@ -39,6 +52,9 @@ class Simulator {
   World world_;
   SubstepChoice substeps_;
   StepStats stats_;
+  CollisionDetector detector_;
+  std::vector<Contact> contacts_;
+  bool collides_ = false;
 };
 
 }  // namespace softbake

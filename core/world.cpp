@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/collision_geometry.hpp"
 #include "core/error.hpp"
-#include "core/text.hpp"
 #include "core/mesh_topology.hpp"
+#include "core/text.hpp"
 #include "core/weld.hpp"
 
 namespace softbake {
@@ -23,7 +24,8 @@ void addSprings(World& world, const IndexPair* pairs, std::size_t count, Index o
     // Critical damping of two masses joined by one spring: 2·sqrt(k·m_a·m_b/(m_a+m_b)).
     const Scalar ma = world.mass[a], mb = world.mass[b];
     const Scalar reduced = ma * mb / (ma + mb);
-    world.springs.push_back({a, b, rest, stiffness, dampingRatio * 2 * std::sqrt(stiffness * reduced)});
+    world.springs.push_back(
+        {a, b, rest, stiffness, dampingRatio * 2 * std::sqrt(stiffness * reduced)});
   }
 }
 
@@ -50,14 +52,16 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   for (const Triangle& t : mesh.triangles)
     for (Index v : t)
       if (v >= mesh.positions.size())
-        throw Error(cat("body '", setup.name, "': triangle index ", v, " is beyond its ", mesh.positions.size(), " vertices"));
+        throw Error(cat("body '", setup.name, "': triangle index ", v, " is beyond its ",
+                        mesh.positions.size(), " vertices"));
   for (const Vec3f& p : mesh.positions)
     if (!p.allFinite())
       throw Error(cat("body '", setup.name, "': a vertex position is not a finite number"));
 
   WeldedMesh welded = weldByPosition(mesh.positions, mesh.triangles);
   if (welded.triangles.empty())
-    throw Error(cat("body '", setup.name, "': the mesh has no usable triangles (", mesh.triangles.size(), " given, ", welded.degenerateTriangles, " degenerate)"));
+    throw Error(cat("body '", setup.name, "': the mesh has no usable triangles (",
+                    mesh.triangles.size(), " given, ", welded.degenerateTriangles, " degenerate)"));
   if (welded.degenerateTriangles)
     note(cat("dropped ", welded.degenerateTriangles, " degenerate triangles"));
   if (welded.duplicateTriangles)
@@ -76,9 +80,11 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   if (closed && !(volume > 0)) closed = false;
   if (!closed && setup.material.pressure != 0) {
     if (topology.boundaryEdges || topology.nonManifoldEdges)
-      note(cat("the mesh is open (", topology.boundaryEdges, " boundary, ", topology.nonManifoldEdges, " non-manifold edges): pressure is off"));
+      note(cat("the mesh is open (", topology.boundaryEdges, " boundary, ",
+               topology.nonManifoldEdges, " non-manifold edges): pressure is off"));
     else
-      note(cat(topology.inconsistentEdges, " edges are wound inconsistently, the mesh has no inside: pressure is off"));
+      note(cat(topology.inconsistentEdges,
+               " edges are wound inconsistently, the mesh has no inside: pressure is off"));
   }
 
   Body body;
@@ -86,6 +92,7 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   body.material = setup.material;
   body.mass = setup.mass;
   body.closed = closed;
+  body.selfCollision = setup.selfCollision.value_or(!closed);
   body.restVolume = volume;
   body.gasAmount = closed ? double(setup.material.pressure) * volume : 0.0;
   body.firstParticle = Index(world.position.size());
@@ -109,7 +116,8 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   std::vector<double> area(body.particleCount, 0.0);
   double totalArea = 0;
   for (const Triangle& t : welded.triangles) {
-    const Vec3d a = welded.positions[t[0]].cast<double>(), b = welded.positions[t[1]].cast<double>(),
+    const Vec3d a = welded.positions[t[0]].cast<double>(),
+                b = welded.positions[t[1]].cast<double>(),
                 c = welded.positions[t[2]].cast<double>();
     const double triangleArea = 0.5 * (b - a).cross(c - a).norm();
     for (Index v : t) area[v] += triangleArea / 3;
@@ -129,7 +137,8 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   };
   for (Index index : setup.pins.particles) {
     if (index >= body.particleCount)
-      throw Error(cat("body '", setup.name, "': pin index ", index, " is beyond its ", body.particleCount, " particles"));
+      throw Error(cat("body '", setup.name, "': pin index ", index, " is beyond its ",
+                      body.particleCount, " particles"));
     pin(index);
   }
   for (const PinBox& box : setup.pins.boxes)
@@ -150,7 +159,8 @@ void addBody(World& world, const BodySetup& setup, BuildReport* report) {
   for (Index begin = body.firstTriangle; begin < body.firstTriangle + body.triangleCount;
        begin += kVolumeChunk)
     world.volumeChunks.push_back(
-        {bodyIndex, begin, std::min(begin + kVolumeChunk, body.firstTriangle + body.triangleCount)});
+        {bodyIndex, begin,
+         std::min(begin + kVolumeChunk, body.firstTriangle + body.triangleCount)});
   world.bodies.push_back(std::move(body));
 }
 
@@ -185,7 +195,9 @@ World buildWorld(const SceneSetup& setup, BuildReport* report) {
   world.chunkVolume.assign(world.volumeChunks.size(), 0.0);
   world.bodyVolume.assign(world.bodies.size(), 0.0);
   world.bodyPressure.assign(world.bodies.size(), 0);
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) world.bodyVolume[b] = world.bodies[b].restVolume;
+  for (std::size_t b = 0; b < world.bodies.size(); ++b)
+    world.bodyVolume[b] = world.bodies[b].restVolume;
+  buildCollisionGeometry(world);
   return world;
 }
 

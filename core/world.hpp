@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/collision_geometry.hpp"
 #include "core/scene_setup.hpp"
 #include "core/types.hpp"
 
@@ -38,6 +39,7 @@ struct Body {
   Scalar mass = 1;
   /// Closed and consistently wound: has a volume, so the gas pressure acts.
   bool closed = false;
+  bool selfCollision = false;
   double restVolume = 0;  ///< m³, at the start
   double gasAmount = 0;   ///< nRT = pressure · restVolume, J; zero when pressure is off
   RenderMesh render;
@@ -77,8 +79,10 @@ struct World {
   std::vector<Vec3> triangleForce;  ///< pressure force on each corner of each triangle
   std::vector<TriangleChunk> volumeChunks;
   std::vector<double> chunkVolume;
-  std::vector<double> bodyVolume;   ///< current enclosed volume per body
-  std::vector<Scalar> bodyPressure; ///< current gas pressure per body, Pa
+  std::vector<double> bodyVolume;    ///< current enclosed volume per body
+  std::vector<Scalar> bodyPressure;  ///< current gas pressure per body, Pa
+
+  CollisionGeometry collision;  ///< soft and static triangles for the collision pipeline
 
   std::size_t particleCount() const { return position.size(); }
 };

@@ -4,14 +4,16 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/contact.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
 
 struct Frame {
-  int number = 1;               ///< 1-based: frame 1 is the initial state
-  double time = 0;              ///< seconds since the start
-  std::vector<Vec3> positions;  ///< every particle of the World, global order
+  int number = 1;                 ///< 1-based: frame 1 is the initial state
+  double time = 0;                ///< seconds since the start
+  std::vector<Vec3> positions;    ///< every particle of the World, global order
+  std::vector<Contact> contacts;  ///< the contacts of the frame's last substep
 };
 
 /// A writer of frames, run on a thread of its own by FramePipeline. Implementations write each file

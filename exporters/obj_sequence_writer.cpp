@@ -198,14 +198,11 @@ ObjSequenceWriter::ObjSequenceWriter(const World& world,
 }
 
 std::filesystem::path ObjSequenceWriter::framePath(int frameNumber) const {
-  char digits[16];
-  char* const end = std::to_chars(digits, digits + sizeof digits, frameNumber).ptr;
-  const std::size_t length = std::size_t(end - digits);
-  std::string name = scene_ + "_";
-  if (length < std::size_t(framePadding_)) name.append(std::size_t(framePadding_) - length, '0');
-  name.append(digits, length);
-  name += ".obj";
-  return objDirectory_ / name;
+  return objDirectory_ / naming().fileName(frameNumber);
+}
+
+FrameNaming ObjSequenceWriter::naming() const {
+  return {"obj", scene_, ".obj", framePadding_};
 }
 
 std::filesystem::path ObjSequenceWriter::materialLibraryPath() const {
@@ -213,10 +210,7 @@ std::filesystem::path ObjSequenceWriter::materialLibraryPath() const {
 }
 
 OutputSequence ObjSequenceWriter::sequence() const {
-  return {"obj",
-          cat("obj/", scene_, "_", std::string(std::size_t(framePadding_), '#'), ".obj"),
-          cat("obj/", scene_, "_%0", framePadding_, "d.obj"),
-          {cat("obj/", scene_, ".mtl")}};
+  return {"obj", naming().pattern(), naming().printfPattern(), {cat("obj/", scene_, ".mtl")}};
 }
 
 void ObjSequenceWriter::write(const Frame& frame) {

@@ -10,6 +10,7 @@
 
 #include "core/world.hpp"
 #include "exporters/frame.hpp"
+#include "exporters/frame_naming.hpp"
 #include "exporters/manifest.hpp"
 
 namespace softbake {
@@ -45,6 +46,8 @@ class ObjSequenceWriter : public FrameSink {
   OutputSequence sequence() const;
 
  private:
+  FrameNaming naming() const;
+
   /// The per-body text that does not change between frames.
   struct BodyText {
     std::string object;     ///< "o name\n"

@@ -82,8 +82,8 @@ class SceneParser {
 
  private:
   void parseSettings(const JsonValue& value) {
-    const JsonObject object =
-        value.object({"fps", "frames", "substeps", "gravity", "units", "max_speed", "skin"});
+    const JsonObject object = value.object(
+        {"fps", "frames", "substeps", "gravity", "units", "max_speed", "skin", "collisions"});
     SimulationSettings& settings = scene_.setup.settings;
     if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
     if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
@@ -100,6 +100,27 @@ class SceneParser {
     if (auto maxSpeed = object.find("max_speed"))
       settings.maxSpeed = Scalar(maxSpeed->numberAbove(0));
     if (auto skin = object.find("skin")) settings.skin = Scalar(skin->numberAtLeast(0));
+    if (auto collisions = object.find("collisions")) parseCollisions(*collisions);
+  }
+
+  void parseCollisions(const JsonValue& value) {
+    const JsonObject object =
+        value.object({"broadphase", "levels", "response", "restitution", "friction"});
+    CollisionSettings& collisions = scene_.setup.settings.collisions;
+    if (auto broadPhase = object.find("broadphase")) {
+      if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
+        broadPhase->fail("expected \"sbhash\", \"spatialhash\", \"bvh\" or \"brute\"");
+    }
+    if (auto levels = object.find("levels"))
+      collisions.subdivisionLevels = int(levels->integerIn(0, 8));
+    if (auto response = object.find("response")) {
+      if (!parseResponseMode(response->string(), collisions.response))
+        response->fail("expected \"two-sided\", \"paper\" or \"none\"");
+    }
+    if (auto restitution = object.find("restitution"))
+      collisions.restitution = Scalar(restitution->numberIn(0, 1));
+    if (auto friction = object.find("friction"))
+      collisions.friction = Scalar(friction->numberAtLeast(0));
   }
 
   // The meshes a `mesh` key names, in their own space. A file may hold several.
@@ -205,8 +226,8 @@ class SceneParser {
 
   void parseBody(const JsonValue& value, std::size_t index,
                  std::map<std::string, std::string>& names) {
-    const JsonObject object = value.object(
-        {"name", "mesh", "merge_meshes", "transform", "material", "mass", "velocity", "pins"});
+    const JsonObject object = value.object({"name", "mesh", "merge_meshes", "transform", "material",
+                                            "mass", "velocity", "pins", "self_collision"});
     BodySetup body;
     body.name = cat("body", index);
     if (auto name = object.find("name")) body.name = nonEmptyString(*name);
@@ -217,6 +238,7 @@ class SceneParser {
     }
     if (auto mass = object.find("mass")) body.mass = Scalar(mass->numberAbove(0));
     if (auto velocity = object.find("velocity")) body.velocity = toVec3(velocity->vector3());
+    if (auto self = object.find("self_collision")) body.selfCollision = self->boolean();
     Eigen::Affine3d transform = Eigen::Affine3d::Identity();
     if (auto t = object.find("transform")) transform = parseTransform(*t);
     bool merge = false;
@@ -290,10 +312,11 @@ class SceneParser {
   }
 
   void parseOutput(const JsonValue& value) {
-    const JsonObject object = value.object({"frame_padding", "obj"});
+    const JsonObject object = value.object({"frame_padding", "obj", "contacts"});
     if (auto padding = object.find("frame_padding"))
       scene_.output.framePadding = int(padding->integerIn(1, 9));
     if (auto obj = object.find("obj")) scene_.output.obj = obj->boolean();
+    if (auto contacts = object.find("contacts")) scene_.output.contacts = contacts->boolean();
   }
 
   std::string_view source_;

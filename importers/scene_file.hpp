@@ -15,8 +15,9 @@ namespace softbake {
 
 /// What the scene asks of the writers. Command-line options override these.
 struct OutputOptions {
-  int framePadding = 4;  ///< digits of the frame number in file names: scene_0001.obj
-  bool obj = true;       ///< write the OBJ sequence
+  int framePadding = 4;   ///< digits of the frame number in file names: scene_0001.obj
+  bool obj = true;        ///< write the OBJ sequence
+  bool contacts = false;  ///< write each frame's contacts as JSON
 };
 
 struct SceneFile {

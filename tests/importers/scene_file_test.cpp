@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/mesh_topology.hpp"
+#include "core/text.hpp"
 #include "core/weld.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
@@ -178,7 +179,7 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
       {two + R"("colour": "red"}]})",
        "scene.json: bodies[1]: unknown key 'colour' (valid keys: name, mesh, merge_meshes, "
        "transform, "
-       "material, mass, velocity, pins)"},
+       "material, mass, velocity, pins, self_collision)"},
       {R"({"bodies": [{"name": "x"}]})", "scene.json: bodies[0]: missing key 'mesh'"},
       {R"({"bodies": [{"mesh": 7}]})",
        "scene.json: bodies[0].mesh: expected string (a mesh file) or object (a primitive)"},
@@ -242,7 +243,7 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
       {oneBody("").insert(1, R"("output": {"obj": "yes"}, )"),
        "scene.json: output.obj: expected boolean"},
       {oneBody("").insert(1, R"("output": {"ply": true}, )"),
-       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj)"},
+       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts)"},
   };
   for (const Case& c : cases) EXPECT_EQ(sceneError(c.json), c.error) << c.json;
 }
@@ -338,6 +339,40 @@ TEST(SceneFile, MultiMeshFilesGiveOneBodyPerMeshUnlessMerged) {
                        test::sharedMeshes()),
             "scene.json: bodies[0].pins.indices: particle indices need a single mesh, but the file "
             "gives 4; set merge_meshes to true or pin with boxes");
+}
+
+TEST(SceneFile, ReadsTheCollisionKeys) {
+  const SceneFile scene = parse(R"({
+    "settings": {"collisions": {"broadphase": "bvh", "levels": 2, "response": "paper",
+                                "restitution": 0.5, "friction": 0.1}},
+    "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true}],
+    "output": {"contacts": true}
+  })");
+  const CollisionSettings& collisions = scene.setup.settings.collisions;
+  EXPECT_EQ(collisions.broadPhase, BroadPhaseKind::Bvh);
+  EXPECT_EQ(collisions.subdivisionLevels, 2);
+  EXPECT_EQ(collisions.response, ResponseMode::Paper);
+  EXPECT_FLOAT_EQ(collisions.restitution, 0.5f);
+  EXPECT_FLOAT_EQ(collisions.friction, 0.1f);
+  EXPECT_EQ(scene.setup.bodies[0].selfCollision, std::optional<bool>(true));
+  EXPECT_TRUE(scene.output.contacts);
+  EXPECT_FALSE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
+                   .setup.bodies[0]
+                   .selfCollision.has_value());
+}
+
+TEST(SceneFile, CollisionKeyErrorsNameTheKeyPath) {
+  const char* body = R"("bodies": [{"mesh": {"primitive": "icosphere"}}])";
+  EXPECT_THAT(
+      sceneError(cat(R"({"settings": {"collisions": {"broadphase": "octree"}}, )", body, "}")),
+      ::testing::HasSubstr("settings.collisions.broadphase: expected \"sbhash\""));
+  EXPECT_THAT(sceneError(cat(R"({"settings": {"collisions": {"response": "soft"}}, )", body, "}")),
+              ::testing::HasSubstr("settings.collisions.response"));
+  EXPECT_THAT(sceneError(cat(R"({"settings": {"collisions": {"levels": 12}}, )", body, "}")),
+              ::testing::HasSubstr("settings.collisions.levels"));
+  EXPECT_THAT(
+      sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": 1}]})"),
+      ::testing::HasSubstr("bodies[0].self_collision"));
 }
 
 }  // namespace

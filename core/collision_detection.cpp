@@ -1,0 +1,143 @@
+#include "core/collision_detection.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "core/world.hpp"
+
+namespace softbake {
+
+namespace {
+constexpr std::size_t kPairGrain = 256;
+
+TriangleCorners corners(const World& world, Index triangle) {
+  const Triangle& t = world.collision.triangleVertices[triangle];
+  return {collisionVertex(world, t[0]), collisionVertex(world, t[1]), collisionVertex(world, t[2])};
+}
+
+const Vec3& previousCollisionVertex(const World& world, Index v) {
+  return v < world.collision.particleCount
+             ? world.previousPosition[v]
+             : world.collision.staticVertex[v - world.collision.particleCount];
+}
+
+bool hasVertex(const Triangle& t, Index v) {
+  return t[0] == v || t[1] == v || t[2] == v;
+}
+
+/// Tests particle p's motion against `triangle`. The triangle moved too during the substep: the
+/// particle's start is shifted by the triangle's own displacement (of its centroid), so the test
+/// sees the motion relative to the triangle. Without that, two bodies closing in on each other
+/// faster than the skin per substep would meet with each particle's start already behind the
+/// other's new surface, and the crossing would go unseen. Exact for a translating triangle; for a
+/// rotating or stretching one, edge contacts catch what is left.
+bool testParticle(const World& world, Index p, Index triangle, ParticleContact& contact) {
+  const CollisionGeometry& geometry = world.collision;
+  const Triangle& t = geometry.triangleVertices[triangle];
+  const TriangleCorners now = corners(world, triangle);
+  Vec3 displacement = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) displacement += now[k] - previousCollisionVertex(world, t[k]);
+  const Vec3 start = world.previousPosition[p] + displacement / Scalar(3);
+  const Vec3& end = world.position[p];
+  if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit)) return false;
+
+  const Vec3 normal = (now[1] - now[0]).cross(now[2] - now[0]);
+  const Scalar startSide = normal.dot(start - now[0]), endSide = normal.dot(end - now[0]);
+  Scalar orientation;
+  if (geometry.surfaceClosed[geometry.triangleSurface[triangle]]) {
+    // A closed surface has an outside: only entering counts. A particle on its way out (left
+    // inside by an earlier step) must not be pushed back in.
+    if (!(startSide >= 0 && endSide < 0)) return false;
+    orientation = 1;
+  } else {
+    orientation = startSide > 0 || (startSide == 0 && endSide < 0) ? Scalar(1) : Scalar(-1);
+  }
+  contact.particle = p;
+  contact.triangle = triangle;
+  contact.normal = orientation * normal.normalized();
+  return true;
+}
+}  // namespace
+
+const Vec3& collisionVertex(const World& world, Index v) {
+  return v < world.collision.particleCount
+             ? world.position[v]
+             : world.collision.staticVertex[v - world.collision.particleCount];
+}
+
+CollisionDetector::CollisionDetector(const CollisionSettings& settings)
+    : broadPhase_(
+          makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {}
+
+void CollisionDetector::detect(const World& world) {
+  const CollisionGeometry& geometry = world.collision;
+  broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
+
+  // Edge contacts: the multi-pass test on every candidate pair, one slot per pair.
+  pairHits_.resize(pairs_.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs_.size(), kPairGrain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                        intersectTrianglePair(corners(world, pairs_[i].first),
+                                              corners(world, pairs_[i].second), pairHits_[i]);
+                    });
+  edgeContacts_.clear();
+  for (std::size_t i = 0; i < pairs_.size(); ++i) {
+    const TrianglePairHits& hits = pairHits_[i];
+    for (int k = 0; k < hits.firstCount; ++k)
+      edgeContacts_.push_back(
+          {pairs_[i].first, pairs_[i].second, hits.firstEdges[k].edge, hits.firstEdges[k].hit});
+    for (int k = 0; k < hits.secondCount; ++k)
+      edgeContacts_.push_back(
+          {pairs_[i].second, pairs_[i].first, hits.secondEdges[k].edge, hits.secondEdges[k].hit});
+  }
+
+  // Particle contacts: every free particle of one triangle of a pair against the other triangle.
+  // A particle belongs to several triangles, so the same (particle, triangle) comes from several
+  // pairs: sorted and made unique before testing.
+  particleCandidates_.clear();
+  auto addCorners = [&](Index from, Index against) {
+    if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
+    const Triangle& target = geometry.triangleVertices[against];
+    for (Index p : geometry.triangleVertices[from])
+      if (world.inverseMass[p] != 0 && !hasVertex(target, p))
+        particleCandidates_.push_back({p, against});
+  };
+  for (const TrianglePair& pair : pairs_) {
+    addCorners(pair.first, pair.second);
+    addCorners(pair.second, pair.first);
+  }
+  std::sort(particleCandidates_.begin(), particleCandidates_.end());
+  particleCandidates_.erase(std::unique(particleCandidates_.begin(), particleCandidates_.end()),
+                            particleCandidates_.end());
+
+  particleHit_.resize(particleCandidates_.size());
+  particleSlots_.resize(particleCandidates_.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleCandidates_.size(), kPairGrain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                        particleHit_[i] =
+                            testParticle(world, particleCandidates_[i].particle,
+                                         particleCandidates_[i].triangle, particleSlots_[i]);
+                    });
+  particleContacts_.clear();
+  for (std::size_t i = 0; i < particleCandidates_.size(); ++i)
+    if (particleHit_[i]) particleContacts_.push_back(particleSlots_[i]);
+  // Candidates were sorted by particle, so each particle's contacts are adjacent; within one
+  // particle, the earliest crossing comes first, ties kept in triangle order. The groups are a
+  // handful of contacts: an insertion sort, which is stable and, unlike std::stable_sort,
+  // allocates nothing.
+  for (std::size_t i = 1; i < particleContacts_.size(); ++i) {
+    const ParticleContact contact = particleContacts_[i];
+    std::size_t j = i;
+    for (; j > 0 && particleContacts_[j - 1].particle == contact.particle &&
+           particleContacts_[j - 1].hit.t > contact.hit.t;
+         --j)
+      particleContacts_[j] = particleContacts_[j - 1];
+    particleContacts_[j] = contact;
+  }
+}
+
+}  // namespace softbake

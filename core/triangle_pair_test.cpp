@@ -1,0 +1,47 @@
+#include "core/triangle_pair_test.hpp"
+
+namespace softbake {
+
+int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const TriangleCorners& face,
+                               std::array<EdgeHit, 2>& hits) {
+  // A zero-area edge triangle lies on one line, and its longest edge covers the other two: testing
+  // all three would report one crossing up to three times, at points a rounding error apart.
+  int firstEdge = 0, passes = 3;
+  const Vec3 normal = (edgeTriangle[1] - edgeTriangle[0]).cross(edgeTriangle[2] - edgeTriangle[0]);
+  if (normal == Vec3::Zero()) {
+    passes = 1;
+    Scalar longest = -1;
+    for (int edge = 0; edge < 3; ++edge) {
+      const Scalar length = (edgeTriangle[(edge + 1) % 3] - edgeTriangle[edge]).squaredNorm();
+      if (length > longest) {
+        longest = length;
+        firstEdge = edge;
+      }
+    }
+  }
+
+  int count = 0;
+  for (int pass = 0; pass < passes && count < 2; ++pass) {
+    const int edge = firstEdge + pass;
+    SegmentTriangleHit hit;
+    if (!intersectSegmentTriangle(edgeTriangle[edge], edgeTriangle[(edge + 1) % 3], face[0],
+                                  face[1], face[2], hit))
+      continue;
+    // Two edges of a proper triangle share only corners, and a corner hit is returned exactly:
+    // equality is the whole duplicate test.
+    if (count == 1 && hit.point == hits[0].hit.point) continue;
+    hits[count].hit = hit;
+    hits[count].edge = static_cast<std::uint8_t>(edge);
+    ++count;
+  }
+  return count;
+}
+
+bool intersectTrianglePair(const TriangleCorners& first, const TriangleCorners& second,
+                           TrianglePairHits& hits) {
+  hits.firstCount = intersectEdgesWithTriangle(first, second, hits.firstEdges);
+  hits.secondCount = intersectEdgesWithTriangle(second, first, hits.secondEdges);
+  return hits.firstCount + hits.secondCount > 0;
+}
+
+}  // namespace softbake

@@ -1,0 +1,46 @@
+#pragma once
+/// Each frame's contacts as JSON, OUT/contacts/<scene>_0001.json, for effects and checks:
+///
+///   {"frame": 12, "time": 0.458333, "scene": "default", "contacts": [
+///     {"kind": "particle-triangle", "position": [x, y, z], "normal": [x, y, z],
+///      "bodies": ["ballA", "ballB"], "triangles": [null, 431], "particle": 87}, ...]}
+///
+/// `bodies` names the surface that moved into the contact, then the one it struck (a body or a
+/// static mesh collider); `triangles` and `particle` are indices within those surfaces, in the
+/// order of the OBJ export's faces and vertices (null where the kind has none).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/world.hpp"
+#include "exporters/frame.hpp"
+#include "exporters/frame_naming.hpp"
+#include "exporters/manifest.hpp"
+
+namespace softbake {
+
+class ContactWriter : public FrameSink {
+ public:
+  /// Copies what it needs from `world`. Creates OUT/contacts. Throws softbake::Error.
+  ContactWriter(const World& world, const std::filesystem::path& outputDirectory, std::string scene,
+                int framePadding = 4);
+  void write(const Frame& frame) override;
+  const char* name() const override { return "contacts"; }
+  std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }
+
+  std::filesystem::path framePath(int frameNumber) const;
+  OutputSequence sequence() const;
+  /// The JSON text of one frame.
+  std::string frameJson(const Frame& frame) const;
+
+ private:
+  std::filesystem::path outputDirectory_;
+  FrameNaming naming_;
+  std::vector<std::string> surfaceNames_;
+  std::vector<Index> surfaceFirstTriangle_;
+  std::vector<Index> bodyFirstParticle_;
+  std::atomic<std::uint64_t> bytes_{0};
+};
+
+}  // namespace softbake

@@ -1,0 +1,367 @@
+// The collision pipeline in whole simulations and in single, hand-built contacts: response
+// cases 1 and 2 against analytic positions and velocities, momentum, detection-only runs, no
+// interpenetration counted by an independent double-precision triangle test, and identical
+// results for every broad phase and thread count.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstring>
+
+#include "core/collision_detection.hpp"
+#include "core/collision_response.hpp"
+#include "core/simulator.hpp"
+#include "tests/core/exact_geometry.hpp"
+#include "tests/core/test_worlds.hpp"
+
+namespace softbake {
+namespace {
+
+// ---- Hand-built contacts -------------------------------------------------------------------
+
+/// A soft triangle whose corner 0 is free and corners 1 and 2 are pinned, over a static mesh.
+SceneSetup particleOverStatic(const Vec3f& start, TriangleMesh obstacle) {
+  SceneSetup scene;
+  scene.settings.gravity.setZero();
+  BodySetup body;
+  body.name = "probe";
+  body.mesh.positions = {start, Vec3f(0.6f, 0.6f, 0.3f), Vec3f(0.6f, 0.6f, -0.3f)};
+  body.mesh.triangles = {{0, 1, 2}};
+  body.material = *findMaterialPreset("rubber");
+  body.pins.particles = {1, 2};
+  scene.bodies.push_back(body);
+  StaticMeshCollider collider;
+  collider.name = "obstacle";
+  collider.mesh = std::move(obstacle);
+  collider.restitution = 0;
+  collider.friction = 0;
+  scene.staticMeshes.push_back(collider);
+  return scene;
+}
+
+/// Two triangles of the square [-1,1]² in the plane through `origin` spanned by u and v, wound so
+/// that u × v is the normal.
+void addSquare(TriangleMesh& mesh, const Vec3f& origin, const Vec3f& u, const Vec3f& v) {
+  const Index first = Index(mesh.positions.size());
+  const Vec3f corners[] = {origin - u - v, origin + u - v, origin + u + v, origin - u + v};
+  for (const Vec3f& corner : corners) mesh.positions.push_back(corner);
+  mesh.triangles.push_back({first, first + 1, first + 2});
+  mesh.triangles.push_back({first, first + 2, first + 3});
+}
+
+/// Moves particle 0 to `end` as if the integrator had, then runs detection and response once.
+std::vector<Contact> collideOnce(World& world, const Vec3& end, const Vec3& velocity,
+                                 ResponseMode mode) {
+  world.previousPosition = world.position;
+  world.position[0] = end;
+  world.velocity[0] = velocity;
+  updateCollisionBoxes(world);
+  CollisionDetector detector(world.settings.collisions);
+  detector.detect(world);
+  std::vector<Contact> contacts;
+  respondToCollisions(world, detector, mode, contacts);
+  return contacts;
+}
+
+const Contact* findParticleContact(const std::vector<Contact>& contacts, Index particle) {
+  for (const Contact& c : contacts)
+    if (c.particle == particle) return &c;
+  return nullptr;
+}
+
+TEST(CollisionResponse, Case1PutsTheParticleAtTheCrossingPlusSkinAndStopsItsNormalSpeed) {
+  TriangleMesh floor;
+  addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));  // normal +y
+  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor));
+  const Scalar skin = world.settings.skin;
+  // From (0.2, 0.1) to (0.4, -0.1): crosses y = 0 halfway, at x = 0.3.
+  const std::vector<Contact> contacts =
+      collideOnce(world, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::Paper);
+  const Contact* contact = findParticleContact(contacts, 0);
+  ASSERT_NE(contact, nullptr);
+  EXPECT_EQ(contact->kind, ContactKind::ParticleTriangle);
+  EXPECT_TRUE(contact->position.isApprox(Vec3(0.3f, 0, 0.05f), 1e-5f))
+      << contact->position.transpose();
+  EXPECT_TRUE(contact->normal.isApprox(Vec3(0, 1, 0), 1e-6f));
+  EXPECT_TRUE(world.position[0].isApprox(Vec3(0.3f, skin, 0.05f), 1e-5f))
+      << world.position[0].transpose();
+  // Restitution 0 and friction 0, the paper's response: the normal speed goes, the rest stays.
+  EXPECT_NEAR(world.velocity[0].y(), 0, 1e-6);
+  EXPECT_NEAR(world.velocity[0].x(), 2, 1e-6);
+}
+
+TEST(CollisionResponse, Case1ReflectsWithRestitutionAndSlowsWithFriction) {
+  TriangleMesh floor;
+  addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
+  SceneSetup scene = particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor);
+  scene.staticMeshes[0].restitution = 0.5f;
+  scene.staticMeshes[0].friction = 0.25f;
+  World world = buildWorld(scene);
+  collideOnce(world, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::TwoSided);
+  // Normal: -2 → +1. Tangential: 2 − μ(1+e)·2 = 2 − 0.75 = 1.25.
+  EXPECT_NEAR(world.velocity[0].y(), 1.0, 1e-5);
+  EXPECT_NEAR(world.velocity[0].x(), 1.25, 1e-5);
+}
+
+TEST(CollisionResponse, Case2PutsTheParticleOnTheCornerLineAndUsesTheAverageNormal) {
+  // A floor (normal +y) and a wall (normal +x) crossing along the z axis: the particle's path
+  // from (0.2, 0.05) to (-0.05, -0.2) goes through the floor at x = 0.15, then the wall at
+  // y = -0.15.
+  TriangleMesh cross;
+  addSquare(cross, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
+  addSquare(cross, Vec3f(0, 0, 0), Vec3f(0, 1, 0), Vec3f(0, 0, 1));
+  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.05f, 0.1f), cross));
+  const Scalar skin = world.settings.skin;
+  const std::vector<Contact> contacts =
+      collideOnce(world, Vec3(-0.05f, -0.2f, 0.1f), Vec3(-1, -1, 0), ResponseMode::Paper);
+  const Contact* contact = findParticleContact(contacts, 0);
+  ASSERT_NE(contact, nullptr);
+  EXPECT_EQ(contact->kind, ContactKind::Corner);
+  const Vec3 average = Vec3(1, 1, 0).normalized();
+  EXPECT_TRUE(contact->normal.isApprox(average, 1e-5f)) << contact->normal.transpose();
+  EXPECT_TRUE(contact->position.isApprox(Vec3(0, 0, 0.1f), 1e-5f)) << contact->position.transpose();
+  EXPECT_TRUE(world.position[0].isApprox(Vec3(0, 0, 0.1f) + skin * average, 1e-5f))
+      << world.position[0].transpose();
+  EXPECT_NEAR(world.velocity[0].dot(average), 0, 1e-5);  // moving straight into the corner: stops
+}
+
+TEST(CollisionResponse, DetectionOnlyRecordsTheContactAndMovesNothing) {
+  TriangleMesh floor;
+  addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
+  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor));
+  const Vec3 end(0.4f, -0.1f, 0.05f), velocity(2, -2, 0);
+  const std::vector<Contact> contacts = collideOnce(world, end, velocity, ResponseMode::None);
+  EXPECT_NE(findParticleContact(contacts, 0), nullptr);
+  EXPECT_EQ(world.position[0], end);
+  EXPECT_EQ(world.velocity[0], velocity);
+}
+
+TEST(CollisionResponse, ParticleLeavingAClosedBodyIsNotPushedBackIn) {
+  // A closed static icosphere; the particle starts inside it and leaves through its surface.
+  const TriangleMesh ball = makeIcosphere(2, 0.5f, Vec3f(0, 0, 0));
+  World world = buildWorld(particleOverStatic(Vec3f(0.1f, 0.3f, 0.0f), ball));
+  const Vec3 end(0.1f, 0.7f, 0.0f);
+  const std::vector<Contact> contacts = collideOnce(world, end, Vec3(0, 5, 0), ResponseMode::Paper);
+  EXPECT_EQ(findParticleContact(contacts, 0), nullptr);
+  EXPECT_EQ(world.position[0], end);
+}
+
+/// Σ m·v and Σ m·x over every particle, in double.
+std::pair<Vec3d, Vec3d> momentumAndMoment(const World& world) {
+  Vec3d momentum = Vec3d::Zero(), moment = Vec3d::Zero();
+  for (std::size_t i = 0; i < world.particleCount(); ++i) {
+    momentum += double(world.mass[i]) * world.velocity[i].cast<double>();
+    moment += double(world.mass[i]) * world.position[i].cast<double>();
+  }
+  return {momentum, moment};
+}
+
+SceneSetup headOnBalls(ResponseMode mode) {
+  SceneSetup scene;
+  scene.settings.gravity.setZero();
+  scene.settings.collisions.response = mode;
+  for (int side : {-1, 1}) {
+    BodySetup body;
+    body.name = side < 0 ? "left" : "right";
+    body.mesh = makeIcosphere(3, 0.5f, Vec3f(0.56f * float(side), 0.05f * float(side), 0));
+    body.material = *findMaterialPreset("rubber");
+    body.mass = side < 0 ? 1.0f : 3.0f;
+    body.velocity = Vec3(-3 * Scalar(side), 0, 0);
+    scene.bodies.push_back(body);
+  }
+  return scene;
+}
+
+TEST(CollisionResponse, TwoSidedSoftContactConservesMomentum) {
+  Simulator simulator(buildWorld(headOnBalls(ResponseMode::TwoSided)));
+  const auto [momentum0, moment0] = momentumAndMoment(simulator.world());
+  std::size_t contacts = 0;
+  for (int frame = 2; frame <= 6; ++frame) {
+    simulator.advanceToFrame(frame);
+    contacts += simulator.lastFrameStats().contacts;
+  }
+  ASSERT_GT(contacts, 0u) << "the balls must have met";
+  const auto [momentum, moment] = momentumAndMoment(simulator.world());
+  // Internal forces and the two-sided response change no total momentum; float round-off does,
+  // a little: 1e-4 of the 6 kg·m/s each ball carries in.
+  EXPECT_LT((momentum - momentum0).norm(), 6e-4) << (momentum - momentum0).transpose();
+  (void)moment0;
+  (void)moment;
+}
+
+TEST(CollisionResponse, PaperModeMovesOnlyTheParticleAndSoDoesNotConserveMomentum) {
+  Simulator simulator(buildWorld(headOnBalls(ResponseMode::Paper)));
+  const Vec3d momentum0 = momentumAndMoment(simulator.world()).first;
+  for (int frame = 2; frame <= 6; ++frame) simulator.advanceToFrame(frame);
+  const Vec3d momentum = momentumAndMoment(simulator.world()).first;
+  EXPECT_GT((momentum - momentum0).norm(), 1e-2) << "the one-sided response should show";
+}
+
+// ---- Whole simulations -------------------------------------------------------------------------
+
+/// Intersecting triangle pairs between different surfaces allowed at the end of a frame.
+constexpr std::size_t kInterpenetrationBound = 0;
+
+/// Pairs of triangles of different surfaces (bodies and static meshes) that intersect, by the
+/// double-precision reference of the tests, not by the code under test. Brute force over pairs
+/// whose boxes overlap.
+std::size_t intersectingPairsBetweenSurfaces(const World& world) {
+  const CollisionGeometry& g = world.collision;
+  auto corner = [&](Index v) -> Vec3d { return collisionVertex(world, v).cast<double>(); };
+  std::vector<Eigen::AlignedBox3d> boxes(g.triangleVertices.size());
+  for (std::size_t t = 0; t < boxes.size(); ++t)
+    for (Index v : g.triangleVertices[t]) boxes[t].extend(corner(v));
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j) {
+      if (g.triangleSurface[i] == g.triangleSurface[j] || !boxes[i].intersects(boxes[j])) continue;
+      const Triangle &a = g.triangleVertices[i], &b = g.triangleVertices[j];
+      count += test::trianglesIntersect({corner(a[0]), corner(a[1]), corner(a[2])},
+                                        {corner(b[0]), corner(b[1]), corner(b[2])});
+    }
+  return count;
+}
+
+SceneSetup twoBallsThrownAtEachOther() {
+  SceneSetup scene;
+  for (int side : {-1, 1}) {
+    BodySetup body;
+    body.name = side < 0 ? "ballA" : "ballB";
+    body.mesh = makeIcosphere(3, 0.5f, Vec3f(1.2f * float(side), side < 0 ? 1.5f : 1.8f, 0));
+    body.material = *findMaterialPreset("rubber");
+    body.velocity = Vec3(-2.5f * Scalar(side), side < 0 ? 2.0f : 1.5f, 0);
+    scene.bodies.push_back(body);
+  }
+  scene.planes.push_back(PlaneCollider{});
+  return scene;
+}
+
+SceneSetup ballsOnStaticSphere() {
+  SceneSetup scene;
+  const char* materials[] = {"jelly", "rubber", "balloon"};
+  const Vec3f centres[] = {Vec3f(-0.3f, 2.2f, 0), Vec3f(0.35f, 3.0f, 0.2f), Vec3f(0, 3.8f, -0.35f)};
+  for (int i = 0; i < 3; ++i) {
+    BodySetup body;
+    body.name = materials[i];
+    body.mesh = makeIcosphere(3, 0.35f, centres[i]);
+    body.material = *findMaterialPreset(materials[i]);
+    scene.bodies.push_back(body);
+  }
+  StaticMeshCollider sphere;
+  sphere.name = "sphere";
+  sphere.mesh = makeIcosphere(4, 0.8f, Vec3f(0, 0.8f, 0));
+  scene.staticMeshes.push_back(sphere);
+  scene.planes.push_back(PlaneCollider{});
+  return scene;
+}
+
+/// Runs `frames` frames; returns the largest count of intersecting pairs seen at a frame's end,
+/// and the total number of contacts.
+std::pair<std::size_t, std::size_t> worstInterpenetration(SceneSetup scene, int frames) {
+  Simulator simulator(buildWorld(scene));
+  std::size_t worst = 0, contacts = 0;
+  for (int frame = 2; frame <= frames; ++frame) {
+    simulator.advanceToFrame(frame);
+    contacts += simulator.lastFrameStats().contacts;
+    worst = std::max(worst, intersectingPairsBetweenSurfaces(simulator.world()));
+  }
+  return {worst, contacts};
+}
+
+TEST(CollisionScenes, ThrownBallsMeetAndDoNotInterpenetrate) {
+  const auto [worst, contacts] = worstInterpenetration(twoBallsThrownAtEachOther(), 48);
+  EXPECT_GT(contacts, 0u) << "the balls must meet within two seconds";
+  EXPECT_LE(worst, kInterpenetrationBound);
+}
+
+TEST(CollisionScenes, BallsFallingOnAStaticSphereDoNotInterpenetrateIt) {
+  const auto [worst, contacts] = worstInterpenetration(ballsOnStaticSphere(), 72);
+  EXPECT_GT(contacts, 0u);
+  EXPECT_LE(worst, kInterpenetrationBound);
+}
+
+TEST(CollisionScenes, WithoutResponseTheBallsPassIntoTheSphere) {
+  SceneSetup scene = ballsOnStaticSphere();
+  scene.settings.collisions.response = ResponseMode::None;
+  const auto [worst, contacts] = worstInterpenetration(scene, 48);
+  EXPECT_GT(contacts, 0u);
+  EXPECT_GT(worst, 20u) << "detection only must let the surfaces cross: the test above can fail";
+}
+
+TEST(CollisionScenes, BallOnTheGroundStaysAboveItWithinTheSkin) {
+  SceneSetup scene = test::ballScene(*findMaterialPreset("rubber"), 3, 0.5f, Vec3f(0, 2, 0));
+  Simulator simulator(buildWorld(scene));
+  const Scalar skin = simulator.world().settings.skin;
+  Scalar lowest = 1;
+  for (int frame = 2; frame <= 72; ++frame)
+    for (int s = 0; s < simulator.substeps().substeps; ++s) {
+      simulator.step(frame);
+      for (const Vec3& p : simulator.world().position) lowest = std::min(lowest, p.y());
+    }
+  EXPECT_GE(lowest, -skin) << "a particle ended a step below the ground";
+}
+
+TEST(CollisionScenes, WithoutResponseTheBallFallsThroughTheGround) {
+  SceneSetup scene = test::ballScene(*findMaterialPreset("rubber"), 3, 0.5f, Vec3f(0, 2, 0));
+  scene.settings.collisions.response = ResponseMode::None;
+  Simulator simulator(buildWorld(scene));
+  std::size_t planeContacts = 0;
+  for (int frame = 2; frame <= 24; ++frame) {
+    simulator.advanceToFrame(frame);
+    planeContacts += simulator.lastFrameStats().planeContacts;
+  }
+  EXPECT_LT(test::centroid(simulator.world()).y(), 0) << "figure 5b: the ball goes through";
+  EXPECT_GT(planeContacts, 0u) << "the crossings are still detected";
+}
+
+// ---- Determinism -------------------------------------------------------------------------------
+
+struct RunRecord {
+  std::vector<Vec3> positions;
+  std::vector<Contact> contacts;
+};
+
+RunRecord record(SceneSetup scene, BroadPhaseKind kind, int threads, int frames) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  scene.settings.collisions.broadPhase = kind;
+  Simulator simulator(buildWorld(scene));
+  RunRecord run;
+  for (int frame = 2; frame <= frames; ++frame) {
+    simulator.advanceToFrame(frame);
+    run.contacts.insert(run.contacts.end(), simulator.contacts().begin(),
+                        simulator.contacts().end());
+  }
+  run.positions = simulator.world().position;
+  return run;
+}
+
+bool sameBytes(const RunRecord& a, const RunRecord& b) {
+  if (a.positions.size() != b.positions.size() || a.contacts.size() != b.contacts.size())
+    return false;
+  if (std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(Vec3)) != 0)
+    return false;
+  for (std::size_t i = 0; i < a.contacts.size(); ++i) {
+    const Contact &x = a.contacts[i], &y = b.contacts[i];
+    if (std::memcmp(x.position.data(), y.position.data(), sizeof(Vec3)) != 0 ||
+        std::memcmp(x.normal.data(), y.normal.data(), sizeof(Vec3)) != 0 ||
+        x.surfaceA != y.surfaceA || x.surfaceB != y.surfaceB || x.triangleA != y.triangleA ||
+        x.triangleB != y.triangleB || x.particle != y.particle || x.kind != y.kind)
+      return false;
+  }
+  return true;
+}
+
+TEST(CollisionDeterminism, EveryBroadPhaseAndThreadCountGivesTheSameBytes) {
+  // Brute force is quadratic: two balls that meet in the first frame keep the test short.
+  const SceneSetup scene = headOnBalls(ResponseMode::TwoSided);
+  constexpr int kFrames = 5;
+  const RunRecord reference = record(scene, BroadPhaseKind::BruteForce, 1, kFrames);
+  ASSERT_FALSE(reference.contacts.empty());
+  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+                              BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce})
+    for (int threads : {1, 2})
+      EXPECT_TRUE(sameBytes(reference, record(scene, kind, threads, kFrames)))
+          << broadPhaseName(kind) << " with " << threads << " threads";
+}
+
+}  // namespace
+}  // namespace softbake
