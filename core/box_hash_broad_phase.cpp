@@ -121,6 +121,7 @@ void BoxHashBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<Tria
     if (surfaces_[s].moving || !surfaces_[s].built) toBuild_.push_back(s);
   tbb::parallel_for(std::size_t(0), toBuild_.size(),
                     [&](std::size_t k) { buildLeaves(input, surfaces_[toBuild_[k]]); });
+  stats_.rebuiltSurfaces = toBuild_.size();
 
   gatherLeaves();
   hashLeaves();

@@ -2,11 +2,12 @@
 /// The paper's broad phase ("sbhash"): multi-level subdivided bounding boxes and the box hash
 /// function (Mesit & Guha, §2.1–2.2).
 ///
-/// Each step, every surface's box (the union of its triangle boxes) is cut into 2^L cells per axis;
-/// each non-empty cell is a leaf holding the triangles whose boxes reach into it. The 8 corners of
-/// every leaf box are hashed into a bucket table; leaves of a bucket are candidate leaf pairs, and
-/// the triangles of overlapping candidate leaves give the triangle pairs. Output: see
-/// core/broad_phase.hpp.
+/// Each step, every moving surface's box (the union of its triangle boxes) is cut into 2^L cells
+/// per axis; each non-empty cell is a leaf holding the triangles whose boxes reach into it (static
+/// surfaces are cut once). The 8 corners of every leaf box are hashed into a bucket table; leaves
+/// sharing a bucket are candidate leaf pairs, and the triangles of overlapping candidate leaves
+/// give the triangle pairs. Surfaces whose box meets no other are skipped. Output: see
+/// core/broad_phase.hpp; the argument that nothing is missed: the .cpp.
 
 #include <array>
 #include <cstdint>
@@ -18,7 +19,9 @@
 namespace softbake {
 
 /// The grid whose cells the box hash function hashes: `h = (⌊x/cx⌋·p1 + ⌊y/cy⌋·p2 + ⌊z/cz⌋·p3)
-/// mod buckets`, with cell coordinates counted from `origin`.
+/// mod buckets`, with the primes of Teschner et al. 2003. Cell coordinates are counted from
+/// `origin` (the scene's lower corner) rather than from the world origin: a translated grid hashes
+/// as well, and small coordinates keep the rounding argument of fit() valid anywhere in the world.
 struct BoxHashGrid {
   using Cell = Eigen::Matrix<std::int64_t, 3, 1>;
 
@@ -43,6 +46,7 @@ struct BoxHashGrid {
 
 /// What the latest findPairs saw, for tests and tuning.
 struct BoxHashStats {
+  std::size_t rebuiltSurfaces = 0;      ///< surfaces whose leaves were built (static ones: once)
   std::size_t activeSurfaces = 0;       ///< surfaces past the surface-box test (see the .cpp)
   std::size_t leaves = 0;               ///< non-empty leaves of the active surfaces, all hashed
   std::size_t buckets = 0;              ///< size of the bucket table

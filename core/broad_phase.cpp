@@ -96,7 +96,8 @@ class BruteForceBroadPhase final : public BroadPhase {
         const Index s = input.triangleSurface[i];
         for (Index t = s; t < input.surfaces.size(); ++t) {
           const CollisionSurface& other = input.surfaces[t];
-          if (t == s ? !other.selfCollision : !input.surfaces[s].moving && !other.moving) continue;
+          if (t == s && !other.selfCollision) continue;
+          if (t != s && !input.surfaces[s].moving && !other.moving) continue;  // both static
           const Index end = other.firstTriangle + other.triangleCount;
           for (Index j = t == s ? i + 1 : other.firstTriangle; j < end; ++j)
             broad_phase_detail::addIfCandidate(input, i, j, out);

@@ -82,6 +82,14 @@ bool correct(World& world, Index p, const StruckPoint& struck, const Vec3& shift
   return true;
 }
 
+/// Where the struck point is now: earlier responses of the substep may have moved its corners.
+Vec3 pointOn(const World& world, const StruckPoint& struck) {
+  Vec3 point = Vec3::Zero();
+  for (int i = 0; i < struck.count; ++i)
+    point += struck.weight[i] * collisionVertex(world, struck.vertex[i]);
+  return point;
+}
+
 /// The point of the line where the planes (n1, p1) and (n2, p2) meet that is closest to `x`.
 /// The normals are unit and at least 30° apart (kCornerCosine), so the system is well posed.
 Vec3 closestPointOnPlaneIntersection(const Vec3& n1, const Vec3& p1, const Vec3& n2, const Vec3& p2,
@@ -190,10 +198,13 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
     const Vec3 normal = unitNormal(world, edge.triangle);
+    const Vec3 facePoint = pointOn(world, struck);
+    const Scalar maxPush =
+        kMaxEdgePush * (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
     for (Index end : ends) {
-      const Scalar depth = normal.dot(collisionVertex(world, end) - edge.hit.point);
+      const Scalar depth = normal.dot(collisionVertex(world, end) - facePoint);
       if (depth >= 0) continue;
-      if (correct(world, end, struck, (skin - depth) * normal, normal,
+      if (correct(world, end, struck, std::min(skin - depth, maxPush) * normal, normal,
                   geometry.restitution[surfaceB], geometry.friction[surfaceB], mode))
         ++stats.edgePushes;
     }

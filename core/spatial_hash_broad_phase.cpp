@@ -28,7 +28,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <functional>
 
 namespace softbake {
 

@@ -220,3 +220,66 @@ TEST(Version, PrintsTheVersion) {
   EXPECT_EQ(run.exitCode, 0);
   EXPECT_EQ(run.output.rfind("softbake ", 0), 0u) << run.output;
 }
+
+TEST_F(CliTest, EveryBroadPhaseWritesTheSameBytes) {
+  // fig4's bodies touch from the first frames on, so the broad phases have contacts to agree on.
+  const fs::path scene = examples() / "fig4_two_bodies.json";
+  std::string reference;
+  for (const char* broadPhase : {"sbhash", "spatialhash", "bvh", "brute"}) {
+    const fs::path out = folder_ / broadPhase;
+    const Result run =
+        runSoftbake("run " + quoted(scene.string()) + " --frames 30 -q --broadphase " + broadPhase +
+                    " -o " + quoted(out.string()));
+    ASSERT_EQ(run.exitCode, 0) << broadPhase << "\n" << run.output;
+    const std::string frame = readFile(out / "obj/fig4_two_bodies_0030.obj") +
+                              readFile(out / "contacts/fig4_two_bodies_0030.json");
+    if (reference.empty()) reference = frame;
+    EXPECT_TRUE(frame == reference) << broadPhase << " differs from sbhash";
+  }
+}
+
+TEST_F(CliTest, ContactsAreWrittenPerFrameWhenAsked) {
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run --frames 14 --contacts -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  std::size_t contacts = 0;
+  for (int frame = 1; frame <= 14; ++frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "contacts/default_%04d.json", frame);
+    const nlohmann::json json = nlohmann::json::parse(readFile(out / name));
+    EXPECT_EQ(json.at("frame").get<int>(), frame);
+    for (const nlohmann::json& contact : json.at("contacts")) {
+      ++contacts;
+      EXPECT_EQ(contact.at("bodies").size(), 2u);
+      EXPECT_EQ(contact.at("position").size(), 3u);
+    }
+  }
+  EXPECT_GT(contacts, 0u) << "the default scene's balls meet by frame 14";
+  const nlohmann::json manifest = nlohmann::json::parse(readFile(out / "manifest.json"));
+  EXPECT_NE(manifest.dump().find("contacts/default_####.json"), std::string::npos);
+}
+
+TEST_F(CliTest, NoResponseLetsTheBallFallThroughTheGround) {
+  const fs::path scene = examples() / "fig5_ground.json";
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run " + quoted(scene.string()) +
+                                 " --frames 24 --no-response -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  // The ball starts 2 m up and falls for a second: without a response it ends below the ground.
+  const std::string obj = readFile(out / "obj/fig5_ground_0024.obj");
+  double highest = -1e9;
+  std::size_t begin = 0;
+  while ((begin = obj.find("\nv ", begin)) != std::string::npos) {
+    double x, y, z;
+    std::sscanf(obj.c_str() + begin + 3, "%lf %lf %lf", &x, &y, &z);
+    highest = std::max(highest, y);
+    ++begin;
+  }
+  EXPECT_LT(highest, 0) << "with --no-response the whole ball passes the ground plane";
+}
+
+TEST_F(CliTest, UnknownBroadPhaseIsRefused) {
+  const Result run = runSoftbake("run --broadphase octree -o " + quoted((folder_ / "o").string()));
+  EXPECT_NE(run.exitCode, 0);
+  EXPECT_NE(run.output.find("octree"), std::string::npos) << run.output;
+}

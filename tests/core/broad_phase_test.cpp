@@ -334,6 +334,11 @@ TEST(BroadPhase, EveryKindStaysExactWhileBodiesDeformStepAfterStep) {
                                   << broadPhaseName(broadPhases[k]->kind()) << " #" << k << ": "
                                   << firstDifference(expected, actual);
     }
+    // Static surfaces (a ball and the ground) are cut into leaves on the first call only.
+    const auto& boxHash = static_cast<const BoxHashBroadPhase&>(*broadPhases[0]);
+    const auto moving = std::size_t(std::count_if(soup.surfaces.begin(), soup.surfaces.end(),
+                                                  [](const auto& s) { return s.moving; }));
+    EXPECT_EQ(boxHash.lastStats().rebuiltSurfaces, step == 0 ? soup.surfaces.size() : moving);
     // Squash, shift and shake the moving bodies; the static ground stays (the contract).
     soup.moveMovingVertices([](Vec3& p) {
       p.y() = Scalar(0.95) * p.y() - Scalar(0.03);
@@ -376,6 +381,22 @@ TEST(BroadPhase, SurfacesFarApartGiveNoPairs) {
       EXPECT_EQ(static_cast<BoxHashBroadPhase&>(*broadPhase).lastStats().activeSurfaces, 0u);
     }
   }
+}
+
+TEST(BroadPhase, EmptyInputAndEmptySurfacesGiveNoPairs) {
+  Soup empty;
+  Soup withEmptySurfaces;
+  withEmptySurfaces.addSurface({}, {}, true, true);
+  withEmptySurfaces.addSurface({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}, true, true);
+  withEmptySurfaces.addSurface({}, {}, false, false);
+  withEmptySurfaces.computeBoxes();
+  for (const Soup* soup : {&empty, &withEmptySurfaces})
+    for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+                                BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
+      std::vector<TrianglePair> pairs = {{0, 1}};
+      makeBroadPhase(kind)->findPairs(soup->input(), pairs);
+      EXPECT_TRUE(pairs.empty()) << broadPhaseName(kind);
+    }
 }
 
 TEST(BroadPhase, WarmedUpFindPairsAllocatesNothing) {
