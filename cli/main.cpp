@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "cli/compare_command.hpp"
 #include "cli/run_command.hpp"
 
 #ifndef SOFTBAKE_VERSION
@@ -61,7 +62,35 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
 
-  CLI11_PARSE(app, argc, argv);
+  softbake::CompareOptions compare;
+  CLI::App* compareApp = app.add_subcommand(
+      "compare",
+      "Compare two rendered frames (or two folders of frames) for image regression. Exit 0 "
+      "within bounds, 1 when they differ, 2 on bad input.");
+  compareApp->add_option("a", compare.a, "reference PNG or folder")->required();
+  compareApp->add_option("b", compare.b, "new PNG or folder")->required();
+  compareApp
+      ->add_option("--tolerance", compare.tolerance,
+                   "largest channel difference (0-255) a matching pixel may have")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 255));
+  compareApp
+      ->add_option("--max-fraction", compare.maxFraction,
+                   "fraction of pixels allowed over the tolerance")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  compareApp->add_option(
+      "--diff", compare.diff,
+      "write a difference image (a folder of them for folders) where frames differ");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // Bad usage of `compare` is bad input: exit 2, as its contract says; CLI11 exits 106 and so on.
+    const int code = app.exit(error);
+    return code == 0 ? 0 : (compareApp->parsed() ? 2 : code);
+  }
   if (runApp->parsed()) return softbake::runCommand(run);
+  if (compareApp->parsed()) return softbake::compareCommand(compare);
   return 0;
 }
