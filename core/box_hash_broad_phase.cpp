@@ -329,6 +329,15 @@ void BoxHashBroadPhase::trianglePairs(const BroadPhaseInput& input,
   buffers_.reset(chunks);
   if (nearA_.size() < chunks) nearA_.resize(chunks);
   if (nearB_.size() < chunks) nearB_.resize(chunks);
+  // A leaf's near triangles never outnumber the largest leaf: reserved once, no growth inside.
+  std::size_t largestLeaf = 0;
+  for (const SurfaceLeaves& surface : surfaces_)
+    for (const Leaf& leaf : surface.leaves)
+      largestLeaf = std::max<std::size_t>(largestLeaf, leaf.end - leaf.begin);
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+    nearA_[chunk].reserve(largestLeaf);
+    nearB_[chunk].reserve(largestLeaf);
+  }
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<TrianglePair>& out = buffers_[chunk];
     std::vector<Index>&nearA = nearA_[chunk], &nearB = nearB_[chunk];

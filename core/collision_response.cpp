@@ -1,5 +1,6 @@
 #include "core/collision_response.hpp"
 
+#include <algorithm>
 #include <array>
 
 #include "core/world.hpp"
@@ -199,11 +200,21 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
     const Vec3 normal = unitNormal(world, edge.triangle);
     const Vec3 facePoint = pointOn(world, struck);
-    const Scalar maxPush =
-        kMaxEdgePush * (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
+    // Only an end near the face can be inside the body through it: a long edge (a big static
+    // triangle under a small body) crosses the face with its ends far outside the body, behind
+    // the face's plane but not behind the face. Near: within the face's longest side.
+    const Triangle& face = geometry.triangleVertices[edge.triangle];
+    Scalar faceSize = 0;
+    for (int k = 0; k < 3; ++k)
+      faceSize = std::max(
+          faceSize,
+          (collisionVertex(world, face[(k + 1) % 3]) - collisionVertex(world, face[k])).norm());
+    const Scalar edgeLength =
+        (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
+    const Scalar maxPush = kMaxEdgePush * std::min(edgeLength, faceSize);
     for (Index end : ends) {
       const Scalar depth = normal.dot(collisionVertex(world, end) - facePoint);
-      if (depth >= 0) continue;
+      if (depth >= 0 || (collisionVertex(world, end) - facePoint).norm() > faceSize) continue;
       if (correct(world, end, struck, std::min(skin - depth, maxPush) * normal, normal,
                   geometry.restitution[surfaceB], geometry.friction[surfaceB], mode))
         ++stats.edgePushes;

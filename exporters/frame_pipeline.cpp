@@ -11,7 +11,10 @@ FramePipeline::FramePipeline(std::vector<std::unique_ptr<FrameSink>> sinks,
                              std::size_t particleCount, std::size_t depth)
     : frames_(depth), particleCount_(particleCount) {
   if (depth == 0) throw Error("the frame pipeline needs at least one frame buffer");
-  for (Frame& frame : frames_) frame.positions.assign(particleCount, Vec3::Zero());
+  for (Frame& frame : frames_) {
+    frame.positions.assign(particleCount, Vec3::Zero());
+    frame.velocities.assign(particleCount, Vec3::Zero());
+  }
   state_.assign(depth, SlotState::Free);
   pendingSinks_.assign(depth, 0);
   order_.assign(depth, 0);

@@ -22,32 +22,7 @@
 #include "core/icosphere.hpp"
 #include "core/spatial_hash_broad_phase.hpp"
 #include "core/text.hpp"
-
-// Counts heap allocations while a test asks for it, to check that a warmed-up findPairs makes
-// none. Replacing the global operator new affects the whole test program; it only forwards to
-// malloc and adds one relaxed atomic load.
-namespace {
-std::atomic<bool> gCountAllocations{false};
-std::atomic<long> gAllocations{0};
-}  // namespace
-
-// GCC sees malloc'd memory reach free through inlined new/delete pairs and calls it a mismatch;
-// here both sides are replaced together, so it is not one.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t size) {
-  if (gCountAllocations.load(std::memory_order_relaxed))
-    gAllocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#pragma GCC diagnostic pop
+#include "tests/core/allocation_counter.hpp"
 
 namespace softbake {
 
@@ -407,11 +382,9 @@ TEST(BroadPhase, WarmedUpFindPairsAllocatesNothing) {
     const auto broadPhase = makeBroadPhase(kind);
     std::vector<TrianglePair> pairs;
     broadPhase->findPairs(soup.input(), pairs);
-    gAllocations = 0;
-    gCountAllocations = true;
+    const test::CountedAllocations counted;
     broadPhase->findPairs(soup.input(), pairs);
-    gCountAllocations = false;
-    EXPECT_EQ(gAllocations.load(), 0) << broadPhaseName(kind);
+    EXPECT_EQ(counted.allocations(), 0) << broadPhaseName(kind);
   }
 }
 

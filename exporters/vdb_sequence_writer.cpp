@@ -1,0 +1,330 @@
+#include "exporters/vdb_sequence_writer.hpp"
+
+#include <unistd.h>
+
+#include <openvdb/io/File.h>
+#include <openvdb/math/Proximity.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/points/PointConversion.h>
+#include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/PointIndexGrid.h>
+#include <openvdb/tree/LeafManager.h>
+#include <cmath>
+#include <mutex>
+#include <set>
+
+#include "core/error.hpp"
+#include "core/text.hpp"
+#include "exporters/atomic_file.hpp"
+#include "exporters/version.hpp"
+
+namespace softbake {
+
+namespace {
+
+std::once_flag openvdbInitialized;
+
+void initializeOpenVdb() {
+  std::call_once(openvdbInitialized, [] { openvdb::initialize(); });
+}
+
+// Distinguishes temporary names of concurrent writers in one process; the pid separates processes.
+std::atomic<unsigned long> temporaryCounter{0};
+
+/// The up-axis rotation: identity for 'y', (x, y, z) -> (x, -z, y) for 'z'. Positions, velocities
+/// and normals all go through it, so the grids stay consistent with each other.
+openvdb::Vec3d toOutputAxes(const Vec3& v, char upAxis) {
+  if (upAxis == 'z') return {double(v.x()), -double(v.z()), double(v.y())};
+  return {double(v.x()), double(v.y()), double(v.z())};
+}
+
+std::uint64_t halfPhysicalMemory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || pageSize <= 0) return std::uint64_t(4) << 30;  // unknown: assume 8 GiB
+  return std::uint64_t(pages) * std::uint64_t(pageSize) / 2;
+}
+
+/// Surface area of every body at rest, in world units².
+double restSurfaceArea(const World& world) {
+  double area = 0;
+  for (const Triangle& t : world.triangles) {
+    const Vec3d a = world.position[t[0]].cast<double>(), b = world.position[t[1]].cast<double>(),
+                c = world.position[t[2]].cast<double>();
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  return area;
+}
+
+std::string sanitize(const std::string& name) {
+  std::string out;
+  for (char ch : name) {
+    const bool keep = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+                      (ch >= '0' && ch <= '9') || ch == '_';
+    out += keep ? ch : '_';
+  }
+  return out.empty() ? "body" : out;
+}
+
+std::uint32_t compressionFlags(VdbOptions::Compression compression) {
+  switch (compression) {
+    case VdbOptions::Compression::Blosc:
+      return openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK;
+    case VdbOptions::Compression::Zip:
+      return openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK;
+    case VdbOptions::Compression::None:
+      return openvdb::io::COMPRESS_NONE;
+  }
+  return openvdb::io::COMPRESS_ZIP;
+}
+
+}  // namespace
+
+bool bloscAvailable() {
+  initializeOpenVdb();
+  return openvdb::io::Archive::hasBloscCompression();
+}
+
+double autoVoxelSize(const World& world) {
+  double length = 0;
+  std::size_t edges = 0;
+  for (const Triangle& t : world.triangles)
+    for (int e = 0; e < 3; ++e) {
+      length += (world.position[t[e]] - world.position[t[(e + 1) % 3]]).cast<double>().norm();
+      ++edges;
+    }
+  return edges == 0 ? 0.0 : 0.5 * length / double(edges);
+}
+
+void validate(const VdbOptions& options, const World& world) {
+  const bool automatic = options.voxelSize == 0;
+  if (!automatic && !(options.voxelSize > 0 && std::isfinite(options.voxelSize)))
+    throw Error(cat("VDB voxel size ", options.voxelSize,
+                    " is invalid: give a positive size in world units, or 0 for automatic"));
+  if (!(options.bandWidth >= 1 && std::isfinite(options.bandWidth)))
+    throw Error(cat("VDB narrow band of ", options.bandWidth,
+                    " voxels is too narrow: a level set needs at least 1 (3 is usual)"));
+  if (options.upAxis != 'y' && options.upAxis != 'z')
+    throw Error(cat("VDB up axis '", options.upAxis, "' is invalid: use 'y' or 'z'"));
+  if (options.compression == VdbOptions::Compression::Blosc && !bloscAvailable())
+    throw Error("this OpenVDB build has no Blosc compression: use zip or none");
+  if (!(options.fps > 0)) throw Error(cat("VDB fps ", options.fps, " must be positive"));
+
+  const double voxel = automatic ? autoVoxelSize(world) : options.voxelSize;
+  if (!(voxel > 0))
+    throw Error("cannot derive a VDB voxel size: the bodies have no edges; give a voxel size");
+
+  // The narrow band holds about (surface area / voxel²) × (2·band + 1) voxels. Per voxel: the
+  // distance (4 bytes) and the closest-triangle index (4), the velocity (12) and fog (4) when
+  // asked, all doubled for partly filled leaves and the trees' own structure.
+  const double bytesPerVoxel =
+      2.0 * (8.0 + (options.velocity ? 12.0 : 0.0) + (options.fog ? 4.0 : 0.0));
+  const double voxels = restSurfaceArea(world) / (voxel * voxel) * (2 * options.bandWidth + 1);
+  const double bytes = voxels * bytesPerVoxel;
+  const double limit =
+      double(options.memoryLimit != 0 ? options.memoryLimit : halfPhysicalMemory());
+  if (bytes > limit) {
+    const double fitting = voxel * std::sqrt(bytes / limit);
+    throw Error(cat("VDB voxel size ", voxel, " would make about ", voxels, " narrow-band voxels (",
+                    bytes / double(1 << 20), " MiB per frame, more than the limit of ",
+                    limit / double(1 << 20), " MiB): use a voxel size of at least ", fitting,
+                    " or a narrower band"));
+  }
+}
+
+VdbSequenceWriter::VdbSequenceWriter(const World& world,
+                                     const std::filesystem::path& outputDirectory,
+                                     std::string scene, VdbOptions options, int framePadding)
+    : outputDirectory_(outputDirectory),
+      naming_{"vdb", std::move(scene), ".vdb", framePadding},
+      options_(std::move(options)) {
+  validate(options_, world);
+  initializeOpenVdb();
+  voxelSize_ = options_.voxelSize == 0 ? autoVoxelSize(world) : options_.voxelSize;
+  particleCount_ = world.particleCount();
+
+  std::set<std::string> used;
+  for (const Body& body : world.bodies) {
+    BodyData data;
+    std::string unique = sanitize(body.name);
+    for (int n = 2; !used.insert(unique).second; ++n) unique = cat(sanitize(body.name), "_", n);
+    data.name = std::move(unique);
+    data.firstParticle = body.firstParticle;
+    data.particleCount = body.particleCount;
+    data.closed = body.closed;
+    data.triangles.reserve(body.triangleCount);
+    for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
+      const Triangle& global = world.triangles[t];
+      data.triangles.push_back({global[0] - body.firstParticle, global[1] - body.firstParticle,
+                                global[2] - body.firstParticle});
+    }
+    bodies_.push_back(std::move(data));
+  }
+  makeDirectories(outputDirectory_ / naming_.folder);
+}
+
+std::filesystem::path VdbSequenceWriter::framePath(int frameNumber) const {
+  return outputDirectory_ / naming_.relativePath(frameNumber);
+}
+
+OutputSequence VdbSequenceWriter::sequence() const {
+  return {"vdb", naming_.pattern(), naming_.printfPattern(), {}};
+}
+
+std::string VdbSequenceWriter::gridName(std::size_t body, const std::string& kind) const {
+  if (bodies_.size() == 1) return kind;
+  return cat(bodies_[body].name, "_", kind);
+}
+
+void VdbSequenceWriter::write(const Frame& frame) {
+  if (frame.positions.size() < particleCount_)
+    throw Error(cat("frame ", frame.number, " has ", frame.positions.size(),
+                    " particle positions; the scene has ", particleCount_));
+  if (options_.velocity && frame.velocities.size() != frame.positions.size())
+    throw Error(cat("frame ", frame.number, " has ", frame.velocities.size(),
+                    " particle velocities for ", frame.positions.size(),
+                    " positions: the VDB `vel` grid needs one per particle"));
+
+  const char up = options_.upAxis;
+  openvdb::MetaMap metadata;
+  metadata.insertMeta("frame", openvdb::Int32Metadata(frame.number));
+  metadata.insertMeta("time", openvdb::DoubleMetadata(frame.time));
+  metadata.insertMeta("fps", openvdb::DoubleMetadata(options_.fps));
+  metadata.insertMeta("scene", openvdb::StringMetadata(naming_.scene));
+  metadata.insertMeta("softbake_version", openvdb::StringMetadata(softbakeVersion()));
+  metadata.insertMeta("units", openvdb::StringMetadata(options_.units));
+  const auto addMetadata = [&](openvdb::GridBase& grid, const std::string& body) {
+    for (auto it = metadata.beginMeta(); it != metadata.endMeta(); ++it)
+      grid.insertMeta(it->first, *it->second);
+    if (!body.empty()) grid.insertMeta("body", openvdb::StringMetadata(body));
+  };
+
+  const openvdb::math::Transform::Ptr transform =
+      openvdb::math::Transform::createLinearTransform(voxelSize_);
+  const float band = float(options_.bandWidth);
+  openvdb::GridPtrVec grids;
+
+  std::vector<openvdb::Vec3s> points;  // index space
+  std::vector<openvdb::Vec3I> triangles;
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    const BodyData& body = bodies_[b];
+    points.resize(body.particleCount);
+    for (Index i = 0; i < body.particleCount; ++i) {
+      const Vec3& p = frame.positions[body.firstParticle + i];
+      if (!p.allFinite())
+        throw Error(cat("body '", body.name, "' has a non-finite position in frame ", frame.number,
+                        " (particle ", i, "): cannot write its VDB level set"));
+      points[i] = openvdb::Vec3s(toOutputAxes(p, up) / voxelSize_);
+    }
+    triangles.resize(body.triangles.size());
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+      triangles[t] =
+          openvdb::Vec3I(body.triangles[t][0], body.triangles[t][1], body.triangles[t][2]);
+
+    // One pass gives the distance and, for each voxel of the band, its closest triangle.
+    const openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> mesh(
+        points, triangles);
+    openvdb::Int32Grid::Ptr closest = openvdb::Int32Grid::create(openvdb::Int32(-1));
+    const int flags = body.closed ? 0 : openvdb::tools::UNSIGNED_DISTANCE_FIELD;
+    openvdb::FloatGrid::Ptr surface = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
+        mesh, *transform, band, band, flags, closest.get());
+    surface->setTransform(transform);
+    surface->setName(gridName(b, body.closed ? "surface" : "surface_udf"));
+    addMetadata(*surface, body.name);
+    grids.push_back(surface);
+
+    if (options_.fog && body.closed) {
+      openvdb::FloatGrid::Ptr fog = surface->deepCopy();
+      openvdb::tools::sdfToFogVolume(*fog);
+      fog->setName(gridName(b, "density"));
+      grids.push_back(fog);
+    }
+
+    if (options_.velocity) {
+      // The surface's topology, each active voxel given the velocity of its closest surface point:
+      // the closest triangle's three particle velocities, weighted by the point's barycentrics.
+      auto velocityTree = std::make_shared<openvdb::Vec3STree>(
+          surface->tree(), openvdb::Vec3s(0.0f), openvdb::TopologyCopy());
+      openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(*velocityTree);
+      const Vec3* velocities = frame.velocities.data() + body.firstParticle;
+      leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+        openvdb::Int32Grid::ConstAccessor lookup = closest->getConstAccessor();
+        for (auto voxel = leaf.beginValueOn(); voxel; ++voxel) {
+          openvdb::Int32 prim = -1;
+          lookup.probeValue(voxel.getCoord(), prim);
+          if (prim < 0 || std::size_t(prim) >= triangles.size()) {
+            voxel.setValueOff();
+            continue;
+          }
+          const openvdb::Vec3I& t = triangles[std::size_t(prim)];
+          openvdb::Vec3d uvw;
+          openvdb::math::closestPointOnTriangleToPoint(
+              openvdb::Vec3d(points[t[0]]), openvdb::Vec3d(points[t[1]]),
+              openvdb::Vec3d(points[t[2]]), voxel.getCoord().asVec3d(), uvw);
+          const openvdb::Vec3d v = uvw[0] * toOutputAxes(velocities[t[0]], up) +
+                                   uvw[1] * toOutputAxes(velocities[t[1]], up) +
+                                   uvw[2] * toOutputAxes(velocities[t[2]], up);
+          voxel.setValue(openvdb::Vec3s(v));
+        }
+      });
+      openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create(velocityTree);
+      velocity->setTransform(transform);
+      velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+      velocity->setName(gridName(b, "vel"));
+      addMetadata(*velocity, body.name);
+      grids.push_back(velocity);
+    }
+  }
+
+  if (options_.contacts && !frame.contacts.empty()) {
+    std::vector<openvdb::Vec3f> positions, normals;
+    std::vector<openvdb::Int32> surfaces;
+    for (const Contact& c : frame.contacts) {
+      positions.emplace_back(toOutputAxes(c.position, up));
+      normals.emplace_back(toOutputAxes(c.normal, up));
+      surfaces.push_back(openvdb::Int32(c.surfaceA));
+    }
+    namespace points_ = openvdb::points;
+    const points_::PointAttributeVector<openvdb::Vec3f> positionArray(positions);
+    auto pointIndex = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(
+        positionArray, *transform);
+    auto contacts = points_::createPointDataGrid<points_::NullCodec, points_::PointDataGrid>(
+        *pointIndex, positionArray, *transform);
+    points_::appendAttribute<openvdb::Vec3f>(contacts->tree(), "N");
+    points_::populateAttribute(contacts->tree(), pointIndex->tree(), "N",
+                               points_::PointAttributeVector<openvdb::Vec3f>(normals));
+    points_::appendAttribute<openvdb::Int32>(contacts->tree(), "body");
+    points_::populateAttribute(contacts->tree(), pointIndex->tree(), "body",
+                               points_::PointAttributeVector<openvdb::Int32>(surfaces));
+    contacts->setName("contacts");
+    addMetadata(*contacts, "");
+    grids.push_back(contacts);
+  }
+
+  // Written under a temporary name and renamed, so readers never see a torn file.
+  const std::filesystem::path path = framePath(frame.number);
+  const std::filesystem::path temporary =
+      path.parent_path() / cat(".", path.filename().string(), ".tmp-", long(::getpid()), "-",
+                               temporaryCounter.fetch_add(1, std::memory_order_relaxed));
+  try {
+    openvdb::io::File file(temporary.string());
+    file.setCompression(compressionFlags(options_.compression));
+    file.write(grids, metadata);
+    file.close();
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw Error(cat("cannot write '", path.string(), "': ", e.what()));
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw Error(cat("cannot write '", path.string(), "': rename failed: ", error.message()));
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (!error) bytes_.fetch_add(size, std::memory_order_relaxed);
+}
+
+}  // namespace softbake

@@ -1,0 +1,713 @@
+#include "render/frame_renderer.hpp"
+
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+#include <GL/glext.h>
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "core/icosphere.hpp"
+#include "core/normals.hpp"
+#include "core/text.hpp"
+#include "exporters/atomic_file.hpp"
+
+namespace softbake {
+
+namespace {
+
+constexpr float kDegrees = std::numbers::pi_v<float> / 180.0f;
+/// Background, written to the image as is (sRGB).
+constexpr float kBackground[3] = {0.86f, 0.87f, 0.89f};
+/// The blob shadows of this many bodies, the first ones, reach the ground shader.
+constexpr int kMaxShadows = 16;
+
+// ---- camera --------------------------------------------------------------------------------
+
+Eigen::Matrix4f lookAt(const Camera& camera) {
+  const Vec3f forward = (camera.target - camera.position).normalized();
+  const Vec3f side = forward.cross(camera.up).normalized();
+  const Vec3f up = side.cross(forward);
+  Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
+  view.block<1, 3>(0, 0) = side.transpose();
+  view.block<1, 3>(1, 0) = up.transpose();
+  view.block<1, 3>(2, 0) = -forward.transpose();
+  view(0, 3) = -side.dot(camera.position);
+  view(1, 3) = -up.dot(camera.position);
+  view(2, 3) = forward.dot(camera.position);
+  return view;
+}
+
+Eigen::Matrix4f perspective(float fovDegrees, float aspect, float near, float far) {
+  const float f = 1.0f / std::tan(0.5f * fovDegrees * kDegrees);
+  Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
+  projection(0, 0) = f / aspect;
+  projection(1, 1) = f;
+  projection(2, 2) = (far + near) / (near - far);
+  projection(2, 3) = 2 * far * near / (near - far);
+  projection(3, 2) = -1;
+  return projection;
+}
+
+/// Any unit vector perpendicular to `n`.
+Vec3f perpendicular(const Vec3f& n) {
+  const Vec3f other = std::abs(n.z()) < 0.9f ? Vec3f::UnitZ() : Vec3f::UnitX();
+  return (other - n * n.dot(other)).normalized();
+}
+
+/// Area-weighted vertex normals of a static mesh (its own render vertices).
+std::vector<Vec3f> meshNormals(const TriangleMesh& mesh) {
+  std::vector<Vec3f> normals(mesh.positions.size(), Vec3f::Zero());
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3f n = (mesh.positions[t[1]] - mesh.positions[t[0]])
+                        .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    for (Index v : t) normals[v] += n;
+  }
+  for (Vec3f& n : normals) {
+    const float length = n.norm();
+    n = length > 0 && std::isfinite(length) ? Vec3f(n / length) : Vec3f::UnitY();
+  }
+  return normals;
+}
+
+// ---- GL helpers ------------------------------------------------------------------------------
+
+constexpr const char* kSurfaceVertex = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec3 aOffset;
+uniform mat4 uViewProjection;
+uniform float uScale;
+out vec3 vPosition;
+out vec3 vNormal;
+void main() {
+  vPosition = aPosition * uScale + aOffset;
+  vNormal = aNormal;
+  gl_Position = uViewProjection * vec4(vPosition, 1.0);
+}
+)";
+
+// Lambert from a key and a fill light plus Blinn-Phong on the key, over a sky/ground hemisphere
+// ambient. Lights are white so grey materials stay grey. Output is gamma encoded.
+constexpr const char* kSurfaceFragment = R"(#version 330 core
+in vec3 vPosition;
+in vec3 vNormal;
+uniform vec3 uColor;
+uniform vec3 uEye;
+uniform vec3 uKey;
+uniform vec3 uFill;
+uniform vec3 uUp;
+uniform float uSpecular;
+uniform int uFlat;
+out vec4 outColor;
+void main() {
+  if (uFlat == 1) {
+    outColor = vec4(pow(uColor, vec3(1.0 / 2.2)), 1.0);
+    return;
+  }
+  vec3 n = normalize(vNormal);
+  vec3 v = normalize(uEye - vPosition);
+  if (dot(n, v) < 0.0) n = -n;  // the inside of an open mesh
+  float key = max(dot(n, uKey), 0.0);
+  float fill = max(dot(n, uFill), 0.0);
+  float hemi = 0.5 + 0.5 * dot(n, uUp);
+  vec3 ambient = mix(vec3(0.08), vec3(0.22), hemi);
+  float specular = key > 0.0 ? pow(max(dot(n, normalize(uKey + v)), 0.0), 48.0) * uSpecular : 0.0;
+  vec3 color = uColor * (ambient + 0.80 * key + 0.28 * fill) + vec3(specular);
+  outColor = vec4(pow(clamp(color, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+constexpr const char* kGroundVertex = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+uniform mat4 uViewProjection;
+out vec3 vPosition;
+void main() {
+  vPosition = aPosition;
+  gl_Position = uViewProjection * vec4(aPosition, 1.0);
+}
+)";
+
+// A procedural grid (anti-aliased with fwidth), soft blob shadows under the bodies, and a fade to
+// the background towards the horizon.
+constexpr const char* kGroundFragment = R"(#version 330 core
+in vec3 vPosition;
+uniform vec3 uOrigin;
+uniform vec3 uAxisU;
+uniform vec3 uAxisV;
+uniform vec3 uNormal;
+uniform vec3 uEye;
+uniform vec3 uKey;
+uniform float uSpacing;
+uniform vec2 uFade;
+uniform vec3 uBackground;
+uniform int uShadowCount;
+uniform vec4 uShadows[16];
+out vec4 outColor;
+float gridLine(vec2 uv) {
+  vec2 d = abs(fract(uv - 0.5) - 0.5) / max(fwidth(uv), vec2(1e-6));
+  return 1.0 - min(min(d.x, d.y), 1.0);
+}
+void main() {
+  vec3 p = vPosition - uOrigin;
+  vec2 uv = vec2(dot(p, uAxisU), dot(p, uAxisV)) / uSpacing;
+  // Lines fade out where cells shrink to a few pixels, before they would alias into moiré.
+  float density = max(fwidth(uv).x, fwidth(uv).y);
+  float line = max(0.45 * gridLine(uv) * (1.0 - smoothstep(0.15, 0.4, density)),
+                   0.8 * gridLine(uv / 4.0) * (1.0 - smoothstep(0.6, 1.6, density)));
+  vec3 color = mix(vec3(0.50), vec3(0.30), line);
+  color *= 0.55 + 0.45 * max(dot(uNormal, uKey), 0.0);
+  float light = 1.0;
+  for (int i = 0; i < uShadowCount; ++i) {
+    vec3 d = vPosition - uShadows[i].xyz;
+    float r = uShadows[i].w;
+    float height = max(-dot(d, uNormal), 0.0);
+    vec3 lateral = d + height * uNormal;
+    float sigma = r * 0.9 + 0.5 * max(height - r, 0.0);
+    float strength = 0.6 * clamp(r / max(height, r), 0.0, 1.0);
+    light *= 1.0 - strength * exp(-dot(lateral, lateral) / (sigma * sigma));
+  }
+  color = pow(clamp(color * light, 0.0, 1.0), vec3(1.0 / 2.2));
+  float fade = smoothstep(uFade.x, uFade.y, length(vPosition - uEye));
+  outColor = vec4(mix(color, uBackground, fade), 1.0);
+}
+)";
+
+GLuint compileShader(GLenum type, const char* source) {
+  const GLuint shader = glCreateShader(type);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    glDeleteShader(shader);
+    throw Error(cat("renderer: the OpenGL driver rejected a shader: ", log));
+  }
+  return shader;
+}
+
+GLuint linkProgram(const char* vertex, const char* fragment) {
+  const GLuint vs = compileShader(GL_VERTEX_SHADER, vertex);
+  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fragment);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    throw Error(cat("renderer: the OpenGL driver could not link a shader program: ", log));
+  }
+  return program;
+}
+
+void checkGl(const char* what) {
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR)
+    throw Error(cat("renderer: OpenGL error 0x", std::hex, error, " ", what));
+}
+
+void uniform(GLuint program, const char* name, const Vec3f& v) {
+  glUniform3f(glGetUniformLocation(program, name), v.x(), v.y(), v.z());
+}
+void uniform(GLuint program, const char* name, float v) {
+  glUniform1f(glGetUniformLocation(program, name), v);
+}
+void uniform(GLuint program, const char* name, int v) {
+  glUniform1i(glGetUniformLocation(program, name), v);
+}
+void uniform(GLuint program, const char* name, const Eigen::Matrix4f& m) {
+  glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, m.data());  // column-major
+}
+
+/// A vertex array of interleaved position + normal floats and triangle indices.
+struct MeshBuffers {
+  GLuint vao = 0, vertices = 0, indices = 0;
+  GLsizei indexCount = 0;
+
+  void create(const std::vector<float>& interleaved, const std::vector<Index>& triangleIndices,
+              GLenum usage) {
+    glGenVertexArrays(1, &vao);
+    glGenBuffers(1, &vertices);
+    glGenBuffers(1, &indices);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vertices);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)),
+                 interleaved.data(), usage);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                          reinterpret_cast<const void*>(3 * sizeof(float)));
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(triangleIndices.size() * sizeof(Index)),
+                 triangleIndices.data(), GL_STATIC_DRAW);
+    indexCount = GLsizei(triangleIndices.size());
+    glBindVertexArray(0);
+  }
+  void destroy() {
+    glDeleteBuffers(1, &vertices);
+    glDeleteBuffers(1, &indices);
+    glDeleteVertexArrays(1, &vao);
+  }
+};
+
+}  // namespace
+
+// ---- scene ---------------------------------------------------------------------------------
+
+Eigen::Matrix4f viewProjection(const Camera& camera, int width, int height) {
+  return perspective(camera.fovDegrees, float(width) / float(height), camera.near, camera.far) *
+         lookAt(camera);
+}
+
+std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, int height,
+                                              const Vec3f& point) {
+  const Eigen::Vector4f clip = viewProjection(camera, width, height) * point.homogeneous();
+  if (clip.w() <= 0) return std::nullopt;
+  const float x = clip.x() / clip.w(), y = clip.y() / clip.w();
+  return Eigen::Vector2f(0.5f * (x + 1) * float(width), 0.5f * (1 - y) * float(height));
+}
+
+Vec3f bodyColor(std::size_t index) {
+  // Hues a golden-ratio turn apart never repeat and stay far from their neighbours.
+  const float hue = std::fmod(0.58f + 0.618034f * float(index), 1.0f);
+  const float saturation = 0.55f, value = 0.85f;
+  const float h = hue * 6;
+  const int sector = int(h) % 6;
+  const float f = h - std::floor(h);
+  const float p = value * (1 - saturation), q = value * (1 - saturation * f),
+              t = value * (1 - saturation * (1 - f));
+  Vec3f srgb;
+  switch (sector) {
+    case 0:
+      srgb = {value, t, p};
+      break;
+    case 1:
+      srgb = {q, value, p};
+      break;
+    case 2:
+      srgb = {p, value, t};
+      break;
+    case 3:
+      srgb = {p, q, value};
+      break;
+    case 4:
+      srgb = {t, p, value};
+      break;
+    default:
+      srgb = {value, p, q};
+      break;
+  }
+  return srgb.array().pow(2.2f).matrix();  // the shaders light in linear RGB
+}
+
+RenderScene makeRenderScene(const World& world, const RenderOptions& options) {
+  if (options.width < 1 || options.height < 1 || options.width > 16384 || options.height > 16384)
+    throw Error(cat("renderer: image size ", options.width, "x", options.height,
+                    " is out of range (1 to 16384 pixels a side)"));
+  if (!(options.fovDegrees > 1 && options.fovDegrees < 170))
+    throw Error(
+        cat("renderer: field of view ", options.fovDegrees, " degrees is out of range (1 to 170)"));
+  RenderScene scene;
+  scene.topology.bodies = world.bodies;
+  scene.topology.triangles = world.triangles;
+  scene.topology.planes = world.planes;
+  scene.topology.staticMeshes = world.staticMeshes;
+  scene.topology.settings = world.settings;
+
+  Eigen::AlignedBox3f bounds;
+  for (const Vec3& p : world.position) bounds.extend(p.cast<float>());
+  for (const StaticMeshCollider& collider : world.staticMeshes)
+    for (const Vec3f& p : collider.mesh.positions) bounds.extend(p);
+  if (!world.planes.empty() && !bounds.isEmpty()) {
+    // Falling bodies end on the ground: the bounds reach down to their shadow on it.
+    const Vec3f point = world.planes.front().point.cast<float>();
+    const Vec3f normal = world.planes.front().normal.cast<float>().normalized();
+    const Eigen::AlignedBox3f bodies = bounds;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3f c = bodies.corner(Eigen::AlignedBox3f::CornerType(corner));
+      bounds.extend(c - normal * (c - point).dot(normal));
+    }
+  }
+  if (bounds.isEmpty()) bounds = Eigen::AlignedBox3f(Vec3f::Constant(-1), Vec3f::Constant(1));
+  scene.boundsMin = bounds.min();
+  scene.boundsMax = bounds.max();
+  scene.size = std::max(bounds.diagonal().norm(), 1e-3f);
+  scene.contactRadius = options.contactRadius > 0 ? options.contactRadius : 0.015f * scene.size;
+
+  Camera& camera = scene.camera;
+  camera.fovDegrees = options.fovDegrees;
+  camera.up = world.planes.empty() ? Vec3f::UnitY()
+                                   : Vec3f(world.planes.front().normal.cast<float>().normalized());
+  const Vec3f center = bounds.center();
+  camera.target = options.cameraTarget.value_or(center);
+  if (options.cameraPosition) {
+    camera.position = *options.cameraPosition;
+  } else {
+    // Fixed view direction, 30° around and 22° above the scene; the distance is the least at
+    // which every corner of the bounds lies inside 85% of both fields of view.
+    const float aspect = float(options.width) / float(options.height);
+    const float tanY = 0.85f * std::tan(0.5f * options.fovDegrees * kDegrees), tanX = tanY * aspect;
+    const Vec3f front = std::abs(camera.up.dot(Vec3f::UnitZ())) < 0.9f
+                            ? Vec3f(Vec3f::UnitZ() - camera.up * camera.up.z()).normalized()
+                            : perpendicular(camera.up);
+    const Vec3f side = camera.up.cross(front).normalized();
+    const float azimuth = 30 * kDegrees, elevation = 22 * kDegrees;
+    const Vec3f horizontalDirection = front * std::cos(azimuth) + side * std::sin(azimuth);
+    const Vec3f direction =
+        horizontalDirection * std::cos(elevation) + camera.up * std::sin(elevation);
+    const Vec3f viewRight = (-direction).cross(camera.up).normalized();
+    const Vec3f viewUp = viewRight.cross(-direction);
+    float distance = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3f offset = bounds.corner(Eigen::AlignedBox3f::CornerType(corner)) - camera.target;
+      // Depth along the view is distance − offset·direction; the offset must fit in it.
+      distance = std::max({distance, std::abs(offset.dot(viewRight)) / tanX + offset.dot(direction),
+                           std::abs(offset.dot(viewUp)) / tanY + offset.dot(direction)});
+    }
+    distance = std::max(distance, 0.1f * scene.size);
+    camera.position = camera.target + direction * distance;
+  }
+  if ((camera.position - camera.target).norm() < 1e-6f)
+    throw Error("renderer: the camera position and target are the same point");
+  if (std::abs((camera.target - camera.position).normalized().dot(camera.up)) > 0.999f)
+    camera.up = perpendicular(camera.up);
+  const float distance = (camera.position - camera.target).norm();
+  camera.near = 0.02f * distance;
+  camera.far = distance + 12 * scene.size;
+  return scene;
+}
+
+// ---- renderer --------------------------------------------------------------------------------
+
+struct FrameRenderer::Gl {
+  GLuint surfaceProgram = 0, groundProgram = 0;
+  std::vector<MeshBuffers> bodies;
+  MeshBuffers statics, sphere, ground;
+  GLuint contactOffsets = 0;
+  GLsizeiptr contactCapacity = 0;  ///< contacts the offset buffer holds
+  GLuint multisampleFbo = 0, multisampleColor = 0, multisampleDepth = 0;
+  GLuint resolveFbo = 0, resolveColor = 0, resolveDepth = 0;
+  int samples = 0;
+  // Per-frame scratch, kept to avoid allocating every frame.
+  std::vector<Vec3f> normals;
+  std::vector<float> interleaved;
+  std::vector<float> offsets;
+  std::vector<std::uint8_t> pixels;
+};
+
+FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
+    : scene_(std::move(scene)),
+      options_(std::move(options)),
+      context_(std::make_unique<EglContext>(options_.egl)),
+      gl_(std::make_unique<Gl>()) {
+  Gl& gl = *gl_;
+  gl.surfaceProgram = linkProgram(kSurfaceVertex, kSurfaceFragment);
+  gl.groundProgram = linkProgram(kGroundVertex, kGroundFragment);
+
+  const World& world = scene_.topology;
+  for (const Body& body : world.bodies) {
+    std::vector<Index> indices;
+    indices.reserve(std::size_t(body.triangleCount) * 3);
+    for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t)
+      for (Index v : world.triangles[t]) indices.push_back(v - body.firstParticle);
+    MeshBuffers buffers;
+    buffers.create(std::vector<float>(std::size_t(body.particleCount) * 6, 0.0f), indices,
+                   GL_DYNAMIC_DRAW);
+    gl.bodies.push_back(buffers);
+  }
+
+  std::vector<float> interleaved;
+  std::vector<Index> indices;
+  for (const StaticMeshCollider& collider : world.staticMeshes) {
+    const Index first = Index(interleaved.size() / 6);
+    const std::vector<Vec3f> normals = meshNormals(collider.mesh);
+    for (std::size_t i = 0; i < collider.mesh.positions.size(); ++i) {
+      const Vec3f& p = collider.mesh.positions[i];
+      interleaved.insert(interleaved.end(),
+                         {p.x(), p.y(), p.z(), normals[i].x(), normals[i].y(), normals[i].z()});
+    }
+    for (const Triangle& t : collider.mesh.triangles)
+      for (Index v : t) indices.push_back(first + v);
+  }
+  gl.statics.create(interleaved, indices, GL_STATIC_DRAW);
+
+  // Contacts: a unit icosphere drawn once per contact, offsets per instance in attribute 2.
+  const TriangleMesh sphere = makeIcosphere(1, 1.0f);
+  interleaved.clear();
+  indices.clear();
+  for (const Vec3f& p : sphere.positions)
+    interleaved.insert(interleaved.end(), {p.x(), p.y(), p.z(), p.x(), p.y(), p.z()});
+  for (const Triangle& t : sphere.triangles) indices.insert(indices.end(), t.begin(), t.end());
+  gl.sphere.create(interleaved, indices, GL_STATIC_DRAW);
+  glGenBuffers(1, &gl.contactOffsets);
+  glBindVertexArray(gl.sphere.vao);
+  glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  glVertexAttribDivisor(2, 1);
+  glBindVertexArray(0);
+
+  // The ground: one large quad on the first plane, centred under the scene.
+  if (!world.planes.empty()) {
+    const Vec3f normal = world.planes.front().normal.cast<float>().normalized();
+    const Vec3f point = world.planes.front().point.cast<float>();
+    const Vec3f center = 0.5f * (scene_.boundsMin + scene_.boundsMax);
+    const Vec3f origin = center - normal * (center - point).dot(normal);
+    const Vec3f u = perpendicular(normal), v = normal.cross(u);
+    const float half = scene_.camera.far;
+    interleaved.clear();
+    for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+      const Vec3f p = origin + half * (float(a) * u + float(b) * v);
+      interleaved.insert(interleaved.end(),
+                         {p.x(), p.y(), p.z(), normal.x(), normal.y(), normal.z()});
+    }
+    // Counter-clockwise seen from above: u × v = normal.
+    gl.ground.create(interleaved, {0, 1, 2, 0, 2, 3}, GL_STATIC_DRAW);
+  }
+
+  // Framebuffers: multisampled colour + depth, resolved into a single-sampled one for reading.
+  GLint maxSamples = 1;
+  glGetIntegerv(GL_MAX_SAMPLES, &maxSamples);
+  gl.samples = std::clamp(options_.samples, 1, std::max(1, int(maxSamples)));
+  const int w = options_.width, h = options_.height;
+  auto makeFramebuffer = [&](GLuint& fbo, GLuint& color, GLuint& depth, int samples) {
+    glGenFramebuffers(1, &fbo);
+    glGenRenderbuffers(1, &color);
+    glGenRenderbuffers(1, &depth);
+    glBindRenderbuffer(GL_RENDERBUFFER, color);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w, h);
+    glBindRenderbuffer(GL_RENDERBUFFER, depth);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+      throw Error(cat("renderer: the OpenGL driver refused a ", w, "x", h, " framebuffer with ",
+                      samples, " samples (status 0x", std::hex, status, ")"));
+  };
+  makeFramebuffer(gl.resolveFbo, gl.resolveColor, gl.resolveDepth, 0);
+  if (gl.samples > 1)
+    makeFramebuffer(gl.multisampleFbo, gl.multisampleColor, gl.multisampleDepth, gl.samples);
+  checkGl("while setting up the renderer");
+}
+
+FrameRenderer::~FrameRenderer() {
+  // The GL objects go with the context; delete them explicitly only where it is current.
+  if (!gl_ || !context_) return;
+  try {
+    context_->makeCurrent();
+  } catch (const Error&) {
+    return;
+  }
+  Gl& gl = *gl_;
+  for (MeshBuffers& buffers : gl.bodies) buffers.destroy();
+  gl.statics.destroy();
+  gl.sphere.destroy();
+  gl.ground.destroy();
+  glDeleteBuffers(1, &gl.contactOffsets);
+  const GLuint framebuffers[] = {gl.multisampleFbo, gl.resolveFbo};
+  glDeleteFramebuffers(2, framebuffers);
+  const GLuint renderbuffers[] = {gl.multisampleColor, gl.multisampleDepth, gl.resolveColor,
+                                  gl.resolveDepth};
+  glDeleteRenderbuffers(4, renderbuffers);
+  glDeleteProgram(gl.surfaceProgram);
+  glDeleteProgram(gl.groundProgram);
+}
+
+std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
+  const World& world = scene_.topology;
+  const Camera& camera = scene_.camera;
+  if (!world.bodies.empty()) {
+    const Body& last = world.bodies.back();
+    if (frame.positions.size() < std::size_t(last.firstParticle) + last.particleCount)
+      throw Error(cat("renderer: frame ", frame.number, " has ", frame.positions.size(),
+                      " positions, the scene has ", last.firstParticle + last.particleCount));
+  }
+  Gl& gl = *gl_;
+  const int w = options_.width, h = options_.height;
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.samples > 1 ? gl.multisampleFbo : gl.resolveFbo);
+  glViewport(0, 0, w, h);
+  glClearColor(kBackground[0], kBackground[1], kBackground[2], 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);  // open meshes show their inside
+
+  const Eigen::Matrix4f vp = viewProjection(camera, w, h);
+  const Vec3f forward = (camera.target - camera.position).normalized();
+  const Vec3f side = forward.cross(camera.up).normalized();
+  const Vec3f up = side.cross(forward);
+  // Key from above, left and behind the camera; fill from the right, low.
+  const Vec3f key = (-forward * 0.6f + up * 1.0f - side * 0.5f).normalized();
+  const Vec3f fill = (-forward * 0.8f + up * 0.1f + side * 0.9f).normalized();
+
+  // Bodies' positions and smooth normals for this frame, and their blob shadows.
+  std::vector<float> shadows;
+  const std::span<const Vec3> positions(frame.positions);
+  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+    const Body& body = world.bodies[b];
+    computeSmoothNormals(world, positions, body, gl.normals);
+    gl.interleaved.resize(std::size_t(body.particleCount) * 6);
+    Vec3d sum = Vec3d::Zero();
+    for (Index i = 0; i < body.particleCount; ++i) {
+      const Vec3f p = positions[body.firstParticle + i].cast<float>();
+      const Vec3f& n = gl.normals[i];
+      std::copy_n(p.data(), 3, &gl.interleaved[std::size_t(i) * 6]);
+      std::copy_n(n.data(), 3, &gl.interleaved[std::size_t(i) * 6 + 3]);
+      sum += p.cast<double>();
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, gl.bodies[b].vertices);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(gl.interleaved.size() * sizeof(float)),
+                    gl.interleaved.data());
+    if (b < kMaxShadows && body.particleCount > 0) {
+      const Vec3f center = (sum / double(body.particleCount)).cast<float>();
+      float radius = 0;
+      for (Index i = 0; i < body.particleCount; ++i)
+        radius = std::max(radius,
+                          (positions[body.firstParticle + i].cast<float>() - center).squaredNorm());
+      shadows.insert(shadows.end(), {center.x(), center.y(), center.z(), std::sqrt(radius)});
+    }
+  }
+
+  glUseProgram(gl.surfaceProgram);
+  uniform(gl.surfaceProgram, "uViewProjection", vp);
+  uniform(gl.surfaceProgram, "uEye", camera.position);
+  uniform(gl.surfaceProgram, "uKey", key);
+  uniform(gl.surfaceProgram, "uFill", fill);
+  uniform(gl.surfaceProgram, "uUp", camera.up);
+  uniform(gl.surfaceProgram, "uScale", 1.0f);
+  uniform(gl.surfaceProgram, "uFlat", 0);
+  glVertexAttrib3f(2, 0, 0, 0);  // meshes have no per-instance offset
+
+  if (options_.wireframe) {
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
+  }
+  uniform(gl.surfaceProgram, "uSpecular", 0.25f);
+  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+    uniform(gl.surfaceProgram, "uColor", bodyColor(b));
+    glBindVertexArray(gl.bodies[b].vao);
+    glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
+  }
+  uniform(gl.surfaceProgram, "uSpecular", 0.08f);
+  uniform(gl.surfaceProgram, "uColor", Vec3f(Vec3f::Constant(0.45f)));
+  if (gl.statics.indexCount > 0) {
+    glBindVertexArray(gl.statics.vao);
+    glDrawElements(GL_TRIANGLES, gl.statics.indexCount, GL_UNSIGNED_INT, nullptr);
+  }
+  if (options_.wireframe) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    uniform(gl.surfaceProgram, "uFlat", 1);
+    for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+      uniform(gl.surfaceProgram, "uColor", Vec3f(bodyColor(b) * 0.3f));
+      glBindVertexArray(gl.bodies[b].vao);
+      glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
+    }
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    uniform(gl.surfaceProgram, "uFlat", 0);
+  }
+
+  if (options_.contacts && !frame.contacts.empty()) {
+    gl.offsets.clear();
+    for (const Contact& c : frame.contacts) {
+      const Vec3f p = c.position.cast<float>();
+      gl.offsets.insert(gl.offsets.end(), {p.x(), p.y(), p.z()});
+    }
+    const auto count = GLsizeiptr(frame.contacts.size());
+    glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
+    if (count > gl.contactCapacity) {
+      gl.contactCapacity = std::max(count, 2 * gl.contactCapacity);
+      glBufferData(GL_ARRAY_BUFFER, gl.contactCapacity * 3 * GLsizeiptr(sizeof(float)), nullptr,
+                   GL_STREAM_DRAW);
+    }
+    glBufferSubData(GL_ARRAY_BUFFER, 0, count * 3 * GLsizeiptr(sizeof(float)), gl.offsets.data());
+    uniform(gl.surfaceProgram, "uScale", scene_.contactRadius);
+    uniform(gl.surfaceProgram, "uColor", options_.contactColor);
+    uniform(gl.surfaceProgram, "uSpecular", 0.15f);
+    glBindVertexArray(gl.sphere.vao);
+    glDrawElementsInstanced(GL_TRIANGLES, gl.sphere.indexCount, GL_UNSIGNED_INT, nullptr,
+                            GLsizei(count));
+  }
+
+  if (gl.ground.indexCount > 0) {
+    const PlaneCollider& planePoint = world.planes.front();
+    const Vec3f normal = planePoint.normal.cast<float>().normalized();
+    const Vec3f u = perpendicular(normal), v = normal.cross(u);
+    // Bold lines every power of ten below the scene's size, thin ones at a quarter of that.
+    const float spacing = 0.25f * std::pow(10.0f, std::floor(std::log10(scene_.size)));
+    const float distance = (camera.position - camera.target).norm();
+    glUseProgram(gl.groundProgram);
+    uniform(gl.groundProgram, "uViewProjection", vp);
+    uniform(gl.groundProgram, "uOrigin", Vec3f(planePoint.point.cast<float>()));
+    uniform(gl.groundProgram, "uAxisU", u);
+    uniform(gl.groundProgram, "uAxisV", v);
+    uniform(gl.groundProgram, "uNormal", normal);
+    uniform(gl.groundProgram, "uEye", camera.position);
+    uniform(gl.groundProgram, "uKey", key);
+    uniform(gl.groundProgram, "uSpacing", spacing);
+    glUniform2f(glGetUniformLocation(gl.groundProgram, "uFade"), distance + 0.5f * scene_.size,
+                distance + 6 * scene_.size);
+    uniform(gl.groundProgram, "uBackground", Vec3f(kBackground[0], kBackground[1], kBackground[2]));
+    uniform(gl.groundProgram, "uShadowCount", int(shadows.size() / 4));
+    if (!shadows.empty())
+      glUniform4fv(glGetUniformLocation(gl.groundProgram, "uShadows"), GLsizei(shadows.size() / 4),
+                   shadows.data());
+    glBindVertexArray(gl.ground.vao);
+    glDrawElements(GL_TRIANGLES, gl.ground.indexCount, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+
+  if (gl.samples > 1) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.multisampleFbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.resolveFbo);
+    glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.resolveFbo);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.pixels.resize(std::size_t(w) * std::size_t(h) * 3);
+  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, gl.pixels.data());
+  checkGl(cat("while rendering frame ", frame.number).c_str());
+
+  // OpenGL's rows start at the bottom, PNG's at the top.
+  std::vector<std::uint8_t> image(gl.pixels.size());
+  const std::size_t row = std::size_t(w) * 3;
+  for (int y = 0; y < h; ++y)
+    std::copy_n(&gl.pixels[std::size_t(h - 1 - y) * row], row, &image[std::size_t(y) * row]);
+  return image;
+}
+
+std::string encodePng(const std::vector<std::uint8_t>& rgb, int width, int height) {
+  std::string png;
+  auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), std::size_t(size));
+  };
+  if (!stbi_write_png_to_func(append, &png, width, height, 3, rgb.data(), width * 3))
+    throw Error(cat("renderer: PNG encoding of a ", width, "x", height, " image failed"));
+  return png;
+}
+
+std::string FrameRenderer::renderPng(const Frame& frame) {
+  return encodePng(renderRgb(frame), options_.width, options_.height);
+}
+
+std::size_t FrameRenderer::writePng(const Frame& frame, const std::filesystem::path& path) {
+  const std::string png = renderPng(frame);
+  writeFileAtomically(path, png);
+  return png.size();
+}
+
+}  // namespace softbake

@@ -1,0 +1,111 @@
+#pragma once
+/// Renders simulated frames off-screen to PNG: soft bodies shaded in per-body colours, static
+/// colliders in grey, the ground plane with a grid and soft blob shadows, contacts as small grey
+/// spheres (the paper's figure 4). OpenGL 3.3 core through EGL, so it runs without a display on
+/// Mesa's llvmpipe or on a GPU.
+///
+/// Deterministic: the image depends only on the world, the options and the frame (no clock, no
+/// frame counter), so the same input gives byte-identical PNGs on the same machine and driver.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/world.hpp"
+#include "exporters/frame.hpp"
+#include "render/egl_context.hpp"
+
+namespace softbake {
+
+struct RenderOptions {
+  int width = 1280, height = 720;  ///< pixels
+  int samples = 4;                 ///< multisampling; 1 or less renders without it
+  /// Camera; when position or target is unset, framed automatically (see frameCamera()).
+  std::optional<Vec3f> cameraPosition;
+  std::optional<Vec3f> cameraTarget;
+  float fovDegrees = 40;                        ///< vertical field of view
+  bool contacts = true;                         ///< draw the frame's contacts as spheres
+  Vec3f contactColor = Vec3f::Constant(0.55f);  ///< linear RGB, 0..1
+  float contactRadius = 0;                      ///< m; 0: 1.5% of the scene's size
+  bool wireframe = false;                       ///< draw the bodies' edges over their surfaces
+  EglOptions egl;
+};
+
+/// A pinhole camera looking from `position` at `target`, `up` the world's up (the ground's normal).
+struct Camera {
+  Vec3f position = Vec3f(0, 0, 5);
+  Vec3f target = Vec3f::Zero();
+  Vec3f up = Vec3f::UnitY();
+  float fovDegrees = 40;
+  float near = 0.01f, far = 100;  ///< clip distances, m
+};
+
+/// World → clip space (OpenGL conventions: right-handed view, depth −1..1).
+Eigen::Matrix4f viewProjection(const Camera& camera, int width, int height);
+
+/// Where `point` lands in the PNG: x to the right, y down from the top row, in pixels (the centre
+/// of pixel (i, j) is (i + 0.5, j + 0.5)). Empty when the point is behind the camera.
+std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, int height,
+                                              const Vec3f& point);
+
+/// What the renderer keeps of a World: body topology, static meshes, the ground, and the
+/// camera and sizes fixed once for the whole sequence. Built on any thread; holds no GL state.
+struct RenderScene {
+  /// Bodies and triangles only (for computeSmoothNormals) plus the static meshes and planes;
+  /// the particle arrays are left empty.
+  World topology;
+  Camera camera;
+  Vec3f boundsMin = Vec3f::Zero(), boundsMax = Vec3f::Zero();  ///< the framed region
+  float size = 1;                                              ///< diagonal of the framed region, m
+  float contactRadius = 0;                                     ///< m
+};
+
+/// Copies what rendering needs from `world` (whose positions are the initial state) and fixes the
+/// camera. Automatic framing covers the bodies' initial bounds, the static meshes and the bodies'
+/// shadow on the first plane (where falling bodies end up), with a margin: frames arrive one by
+/// one, so the bounds of the whole animation are not known in advance, and a camera fitted per
+/// frame would jump. Throws softbake::Error for options out of range.
+RenderScene makeRenderScene(const World& world, const RenderOptions& options);
+
+/// The per-body colour of body `index`: golden-ratio hue steps at soft saturation, linear RGB.
+Vec3f bodyColor(std::size_t index);
+
+/// Owns an EGL context (current on the thread that constructs it) and the GL objects of one scene.
+/// Every call must come from that thread.
+class FrameRenderer {
+ public:
+  /// Creates the context, compiles the shaders and allocates the framebuffers. Throws
+  /// softbake::Error (EGL missing, GL too old, a framebuffer the driver refuses).
+  FrameRenderer(RenderScene scene, RenderOptions options);
+  ~FrameRenderer();
+  FrameRenderer(const FrameRenderer&) = delete;
+  FrameRenderer& operator=(const FrameRenderer&) = delete;
+
+  /// The frame as RGB8, top row first, width·height·3 bytes.
+  std::vector<std::uint8_t> renderRgb(const Frame& frame);
+  /// The frame as PNG file bytes.
+  std::string renderPng(const Frame& frame);
+  /// Renders and writes the PNG atomically (temporary file, then rename); returns its size.
+  std::size_t writePng(const Frame& frame, const std::filesystem::path& path);
+
+  const RenderScene& scene() const { return scene_; }
+  const RenderOptions& options() const { return options_; }
+  const EglContext& context() const { return *context_; }
+
+ private:
+  struct Gl;
+  RenderScene scene_;
+  RenderOptions options_;
+  std::unique_ptr<EglContext> context_;
+  std::unique_ptr<Gl> gl_;
+};
+
+/// PNG bytes of an RGB8 image, top row first.
+std::string encodePng(const std::vector<std::uint8_t>& rgb, int width, int height);
+
+}  // namespace softbake

@@ -1,0 +1,49 @@
+#pragma once
+/// A FrameSink that renders every frame to OUT/png/<scene>_0001.png (the OBJ sequence's naming).
+///
+/// The EGL context belongs to the thread that renders: the sink is constructed on the main thread
+/// but FramePipeline calls write() from the sink's own thread, so the context and every GL object
+/// are created by the first write(), and the simulation never waits for a frame to render.
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "core/world.hpp"
+#include "exporters/frame.hpp"
+#include "exporters/frame_naming.hpp"
+#include "exporters/manifest.hpp"
+#include "render/frame_renderer.hpp"
+
+namespace softbake {
+
+class PngSequenceRenderer : public FrameSink {
+ public:
+  /// Copies what it needs from `world` (its positions are the initial state, used to frame the
+  /// camera). Creates OUT/png. Throws softbake::Error; EGL errors come from the first write().
+  PngSequenceRenderer(const World& world, const std::filesystem::path& outputDirectory,
+                      std::string scene, RenderOptions options = {}, int framePadding = 4);
+  ~PngSequenceRenderer() override;
+
+  void write(const Frame& frame) override;
+  /// Releases the context and the GL objects on the rendering thread.
+  void finish() override;
+  const char* name() const override { return "png"; }
+  std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }
+
+  std::filesystem::path framePath(int frameNumber) const;
+  OutputSequence sequence() const;
+  /// The camera, fixed for the whole sequence.
+  const Camera& camera() const { return scene_.camera; }
+
+ private:
+  std::filesystem::path outputDirectory_;
+  FrameNaming naming_;
+  RenderScene scene_;
+  RenderOptions options_;
+  std::unique_ptr<FrameRenderer> renderer_;  ///< made by the first write(), on its thread
+  std::atomic<std::uint64_t> bytes_{0};
+};
+
+}  // namespace softbake
