@@ -58,6 +58,20 @@ int main(int argc, char** argv) {
                    "detect contacts but do not respond (the paper's figure 5b)");
   runApp->add_flag("--contacts", run.contacts,
                    "write each frame's contacts to OUT/contacts/<scene>_0001.json ...");
+  bool renderOn = false, renderOff = false;
+  CLI::Option* renderFlag = runApp->add_flag(
+      "--render", renderOn,
+      "render PNG frames with EGL off screen (on by default for the built-in scene)");
+  runApp->add_flag("--no-render", renderOff, "write no PNG frames")->excludes(renderFlag);
+  runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
+  runApp->add_flag("--vdb", run.vdb, "write OpenVDB level sets, velocity and contacts per frame");
+  runApp
+      ->add_option("--voxel-size", run.voxelSize,
+                   "VDB voxel size in scene units (default: half the mean edge length)")
+      ->check(CLI::PositiveNumber);
+  runApp->add_flag("--vdb-fog", run.vdbFog, "also write a fog volume (density) per body");
+  runApp->add_option("--up", run.upAxis, "up axis of the VDB export: y (Houdini) or z (Blender)")
+      ->check(CLI::IsMember({"y", "z"}));
   runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
@@ -90,7 +104,11 @@ int main(int argc, char** argv) {
     const int code = app.exit(error);
     return code == 0 ? 0 : (compareApp->parsed() ? 2 : code);
   }
-  if (runApp->parsed()) return softbake::runCommand(run);
+  if (runApp->parsed()) {
+    if (renderOn) run.render = true;
+    if (renderOff) run.render = false;
+    return softbake::runCommand(run);
+  }
   if (compareApp->parsed()) return softbake::compareCommand(compare);
   return 0;
 }

@@ -16,7 +16,9 @@
 #include "exporters/frame_pipeline.hpp"
 #include "exporters/manifest.hpp"
 #include "exporters/obj_sequence_writer.hpp"
+#include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
+#include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
 
@@ -52,6 +54,34 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
   if (options.noResponse) collisions.response = ResponseMode::None;
   if (options.levels) collisions.subdivisionLevels = *options.levels;
   if (options.contacts) scene.output.contacts = true;
+  if (options.render) scene.output.png = *options.render;
+  if (options.vdb) scene.output.vdb = true;
+}
+
+RenderOptions renderOptions(const RunOptions& options) {
+  RenderOptions render;
+  if (options.size) {
+    int width = 0, height = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(options.size->c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 ||
+        (x != 'x' && x != 'X') || width < 16 || height < 16 || width > 16384 || height > 16384)
+      throw Error(cat("--size: expected WIDTHxHEIGHT between 16x16 and 16384x16384, got '",
+                      *options.size, "'"));
+    render.width = width;
+    render.height = height;
+  }
+  return render;
+}
+
+VdbOptions vdbOptions(const RunOptions& options, const World& world) {
+  VdbOptions vdb;
+  if (options.voxelSize) vdb.voxelSize = *options.voxelSize;
+  vdb.fog = options.vdbFog;
+  if (options.upAxis) vdb.upAxis = (*options.upAxis)[0];
+  vdb.fps = world.settings.fps;
+  vdb.units = world.settings.units;
+  validate(vdb, world);  // before anything is written
+  return vdb;
 }
 
 void describeSubsteps(const SubstepChoice& choice) {
@@ -118,6 +148,10 @@ int run(const RunOptions& options) {
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
 
+  const RenderOptions render = renderOptions(options);
+  std::optional<VdbOptions> vdb;
+  if (scene.output.vdb) vdb = vdbOptions(options, world);
+
   // Everything above validated the input: only now is anything written.
   fs::create_directories(options.out);
   fs::remove(options.out / "manifest.json");
@@ -138,6 +172,20 @@ int run(const RunOptions& options) {
     manifest.sequences.push_back(contacts->sequence());
     sinks.push_back(std::move(contacts));
   }
+  if (vdb) {
+    removeStaleFrames(options.out / "vdb", name, ".vdb");
+    auto writer = std::make_unique<VdbSequenceWriter>(world, options.out, name, *vdb,
+                                                      scene.output.framePadding);
+    manifest.sequences.push_back(writer->sequence());
+    sinks.push_back(std::move(writer));
+  }
+  if (scene.output.png) {
+    removeStaleFrames(options.out / "png", name, ".png");
+    auto renderer = std::make_unique<PngSequenceRenderer>(world, options.out, name, render,
+                                                          scene.output.framePadding);
+    manifest.sequences.push_back(renderer->sequence());
+    sinks.push_back(std::move(renderer));
+  }
   FramePipeline pipeline(std::move(sinks), world.particleCount());
 
   std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
@@ -157,6 +205,7 @@ int run(const RunOptions& options) {
     out.number = frame;
     out.time = (frame - 1) / world.settings.fps;
     std::copy(world.position.begin(), world.position.end(), out.positions.begin());
+    std::copy(world.velocity.begin(), world.velocity.end(), out.velocities.begin());
     out.contacts = simulator.contacts();
     pipeline.submit(out);
     progress.update(frame);

@@ -20,7 +20,13 @@ struct RunOptions {
   std::optional<int> levels;              ///< sbhash subdivision level
   bool noResponse = false;                ///< detection only: --response none
   bool contacts = false;                  ///< write OUT/contacts/<scene>_0001.json …
-  int threads = 0;                        ///< 0: all cores
+  std::optional<bool> render;             ///< --render / --no-render; unset: the scene's choice
+  std::optional<std::string> size;        ///< "1280x720"
+  bool vdb = false;                       ///< write OUT/vdb/<scene>_0001.vdb …
+  std::optional<double> voxelSize;
+  bool vdbFog = false;
+  std::optional<std::string> upAxis;  ///< "y" or "z", for the VDB export
+  int threads = 0;                    ///< 0: all cores
   bool quiet = false;
 };
 

@@ -39,7 +39,7 @@ constexpr std::string_view kDefaultScene = R"json({
     {"type": "plane", "name": "ground", "point": [0, 0, 0], "normal": [0, 1, 0],
      "restitution": 0.2, "friction": 0.3}
   ],
-  "output": {"frame_padding": 4, "obj": true}
+  "output": {"frame_padding": 4, "obj": true, "png": true}
 }
 )json";
 

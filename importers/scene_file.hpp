@@ -18,6 +18,8 @@ struct OutputOptions {
   int framePadding = 4;   ///< digits of the frame number in file names: scene_0001.obj
   bool obj = true;        ///< write the OBJ sequence
   bool contacts = false;  ///< write each frame's contacts as JSON
+  bool png = false;       ///< render each frame to PNG
+  bool vdb = false;       ///< write each frame as OpenVDB grids
 };
 
 struct SceneFile {

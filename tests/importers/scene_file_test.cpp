@@ -243,7 +243,7 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
       {oneBody("").insert(1, R"("output": {"obj": "yes"}, )"),
        "scene.json: output.obj: expected boolean"},
       {oneBody("").insert(1, R"("output": {"ply": true}, )"),
-       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts)"},
+       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts, png, vdb)"},
   };
   for (const Case& c : cases) EXPECT_EQ(sceneError(c.json), c.error) << c.json;
 }
