@@ -64,6 +64,8 @@ int main(int argc, char** argv) {
       "render PNG frames with EGL off screen (on by default for the built-in scene)");
   runApp->add_flag("--no-render", renderOff, "write no PNG frames")->excludes(renderFlag);
   runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
+  runApp->add_flag("--no-contact-spheres", run.noContactSpheres,
+                   "render without the grey spheres at the contact points");
   runApp->add_flag("--vdb", run.vdb, "write OpenVDB level sets, velocity and contacts per frame");
   runApp
       ->add_option("--voxel-size", run.voxelSize,

@@ -60,6 +60,7 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
 
 RenderOptions renderOptions(const RunOptions& options) {
   RenderOptions render;
+  render.contacts = !options.noContactSpheres;
   if (options.size) {
     int width = 0, height = 0;
     char x = 0, extra = 0;

@@ -22,6 +22,7 @@ struct RunOptions {
   bool contacts = false;                  ///< write OUT/contacts/<scene>_0001.json …
   std::optional<bool> render;             ///< --render / --no-render; unset: the scene's choice
   std::optional<std::string> size;        ///< "1280x720"
+  bool noContactSpheres = false;          ///< render without the contact spheres
   bool vdb = false;                       ///< write OUT/vdb/<scene>_0001.vdb …
   std::optional<double> voxelSize;
   bool vdbFog = false;

@@ -211,7 +211,7 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
           (collisionVertex(world, face[(k + 1) % 3]) - collisionVertex(world, face[k])).norm());
     const Scalar edgeLength =
         (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
-    const Scalar maxPush = kMaxEdgePush * std::min(edgeLength, faceSize);
+    const Scalar maxPush = kMaxEdgePush * edgeLength;
     for (Index end : ends) {
       const Scalar depth = normal.dot(collisionVertex(world, end) - facePoint);
       if (depth >= 0 || (collisionVertex(world, end) - facePoint).norm() > faceSize) continue;

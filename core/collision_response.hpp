@@ -40,8 +40,8 @@ struct CollisionResponseStats {
 /// about 12°, so a particle through their shared edge stays case 1.
 constexpr Scalar kCornerCosine = Scalar(0.8660254);
 
-/// An edge end is pushed out of a face by at most this fraction of the shorter of the edge and
-/// the face's longest side per substep. The half-space behind a face reaches beyond the body near
+/// An edge end is pushed out of a face by at most this fraction of the edge's length per
+/// substep. The half-space behind a face reaches beyond the body near
 /// its silhouette, so an end "behind" a face may in truth be outside the body: a full push there
 /// would move it, and the face with it, by up to an edge length in one substep, which springs turn
 /// into an explosion. Capped, a deep penetration is undone over a few substeps instead.

@@ -283,3 +283,73 @@ TEST_F(CliTest, UnknownBroadPhaseIsRefused) {
   EXPECT_NE(run.exitCode, 0);
   EXPECT_NE(run.output.find("octree"), std::string::npos) << run.output;
 }
+
+// ---- Rendered frames against the committed golden frames (tests/golden) ----------------------
+
+/// Renders `scene` (empty: the built-in one) at 320×240 for 120 frames into `out`.
+void renderSmall(const std::string& scene, const fs::path& out) {
+  const Result run =
+      runSoftbake("run " + (scene.empty() ? std::string() : quoted(scene)) +
+                  " --render --size 320x240 --frames 120 -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+}
+
+int compareFrames(const fs::path& golden, const fs::path& rendered) {
+  // Tolerance for other Mesa versions and GPUs: a pixel may move by 8 of 255 per channel, and
+  // 0.5% of the pixels (antialiased silhouette edges) may move by more.
+  return runSoftbake("compare " + quoted(golden.string()) + " " + quoted(rendered.string()) +
+                     " --tolerance 8 --max-fraction 0.005")
+      .exitCode;
+}
+
+fs::path golden(const std::string& name) {
+  return fs::path(SOFTBAKE_SOURCE_DIR) / "tests/golden" / name;
+}
+
+TEST_F(CliTest, RenderedFramesMatchTheGoldenFrames) {
+  renderSmall("", folder_ / "default");
+  renderSmall((examples() / "fig5_ground.json").string(), folder_ / "fig5");
+  for (const char* frame : {"0001", "0010", "0060", "0120"}) {
+    const std::string name = std::string("default_") + frame + ".png";
+    EXPECT_EQ(compareFrames(golden(name), folder_ / "default/png" / name), 0) << name;
+  }
+  for (const char* frame : {"0001", "0060", "0120"}) {
+    const std::string name = std::string("fig5_ground_") + frame + ".png";
+    EXPECT_EQ(compareFrames(golden(name), folder_ / "fig5/png" / name), 0) << name;
+  }
+  // A change in what a frame shows must fail: the balls one frame further on.
+  EXPECT_EQ(compareFrames(golden("default_0060.png"), folder_ / "default/png/default_0061.png"), 1);
+}
+
+TEST_F(CliTest, RenderingIsByteIdenticalForOneAndTwoThreads) {
+  for (const char* threads : {"1", "2"}) {
+    const Result run = runSoftbake(std::string("run --render --size 160x120 --frames 12 -q -j ") +
+                                   threads + " -o " + quoted((folder_ / threads).string()));
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+  }
+  EXPECT_TRUE(readFile(folder_ / "1/png/default_0012.png") ==
+              readFile(folder_ / "2/png/default_0012.png"));
+}
+
+TEST_F(CliTest, NoRenderWritesNoFrames) {
+  const Result run =
+      runSoftbake("run --no-render --frames 2 -q -o " + quoted((folder_ / "o").string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_FALSE(fs::exists(folder_ / "o/png"));
+}
+
+TEST_F(CliTest, RendererStartFailureIsAClearError) {
+  // An EGL platform that does not exist: the same path as a machine without a usable driver.
+  const std::string command = "SOFTBAKE_EGL_PLATFORM=0x1234 " + std::string(SOFTBAKE_BINARY) +
+                              " run --render --frames 2 -q -o " +
+                              quoted((folder_ / "bad").string()) + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, read);
+  const int status = pclose(pipe);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << output;
+  EXPECT_NE(output.find("libegl-mesa0"), std::string::npos) << output;
+  EXPECT_NE(output.find("--no-render"), std::string::npos) << output;
+}
