@@ -58,9 +58,21 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
   if (options.vdb) scene.output.vdb = true;
 }
 
-RenderOptions renderOptions(const RunOptions& options) {
+/// The scene's render settings, then the command line's.
+RenderOptions renderOptions(const RunOptions& options, const RenderSettings& scene) {
   RenderOptions render;
-  render.contacts = !options.noContactSpheres;
+  render.width = scene.width.value_or(render.width);
+  render.height = scene.height.value_or(render.height);
+  render.samples = scene.samples.value_or(render.samples);
+  render.cameraPosition = scene.cameraPosition;
+  render.cameraTarget = scene.cameraTarget;
+  render.fovDegrees = scene.fovDegrees.value_or(render.fovDegrees);
+  render.contacts = scene.contactSpheres.value_or(render.contacts) && !options.noContactSpheres;
+  render.contactColor = scene.contactColor.value_or(render.contactColor);
+  render.contactRadius = scene.contactRadius.value_or(render.contactRadius);
+  render.wireframe = scene.wireframe.value_or(render.wireframe);
+  for (const std::optional<Vec3f>& color : scene.bodyColors)
+    render.bodyColors.push_back(color.value_or(Vec3f(-1, -1, -1)));
   if (options.size) {
     int width = 0, height = 0;
     char x = 0, extra = 0;
@@ -149,7 +161,7 @@ int run(const RunOptions& options) {
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
 
-  const RenderOptions render = renderOptions(options);
+  const RenderOptions render = renderOptions(options, scene.render);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(options, world);
 

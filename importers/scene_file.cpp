@@ -61,7 +61,8 @@ class SceneParser {
 
   SceneFile parse(const nlohmann::json& json) {
     const JsonObject root =
-        JsonValue(json, source_, "").object({"name", "settings", "bodies", "colliders", "output"});
+        JsonValue(json, source_, "")
+            .object({"name", "settings", "bodies", "colliders", "output", "render"});
     scene_.setup.name = fileSafeSceneName(std::filesystem::path(source_).stem().string());
     if (auto name = root.find("name")) scene_.setup.name = sceneName(*name);
     if (auto settings = root.find("settings")) parseSettings(*settings);
@@ -77,6 +78,8 @@ class SceneParser {
       for (std::size_t i = 0; i < colliderValues.size(); ++i) parseCollider(colliderValues[i], i);
     }
     if (auto output = root.find("output")) parseOutput(*output);
+    if (auto render = root.find("render")) parseRender(*render);
+    scene_.render.bodyColors.resize(scene_.setup.bodies.size());
     return std::move(scene_);
   }
 
@@ -227,7 +230,7 @@ class SceneParser {
   void parseBody(const JsonValue& value, std::size_t index,
                  std::map<std::string, std::string>& names) {
     const JsonObject object = value.object({"name", "mesh", "merge_meshes", "transform", "material",
-                                            "mass", "velocity", "pins", "self_collision"});
+                                            "mass", "velocity", "pins", "self_collision", "color"});
     BodySetup body;
     body.name = cat("body", index);
     if (auto name = object.find("name")) body.name = nonEmptyString(*name);
@@ -239,6 +242,8 @@ class SceneParser {
     if (auto mass = object.find("mass")) body.mass = Scalar(mass->numberAbove(0));
     if (auto velocity = object.find("velocity")) body.velocity = toVec3(velocity->vector3());
     if (auto self = object.find("self_collision")) body.selfCollision = self->boolean();
+    std::optional<Vec3f> color;
+    if (auto c = object.find("color")) color = colour(*c);
     Eigen::Affine3d transform = Eigen::Affine3d::Identity();
     if (auto t = object.find("transform")) transform = parseTransform(*t);
     bool merge = false;
@@ -264,6 +269,8 @@ class SceneParser {
       mesh.name = split.name;
       split.mesh = std::move(mesh);
       scene_.setup.bodies.push_back(std::move(split));
+      scene_.render.bodyColors.resize(scene_.setup.bodies.size());
+      scene_.render.bodyColors.back() = color;
     }
   }
 
@@ -309,6 +316,40 @@ class SceneParser {
   static void readContact(const JsonObject& object, Scalar& restitution, Scalar& friction) {
     if (auto r = object.find("restitution")) restitution = Scalar(r->numberIn(0, 1));
     if (auto f = object.find("friction")) friction = Scalar(f->numberAtLeast(0));
+  }
+
+  static Vec3f colour(const JsonValue& value) {
+    const Eigen::Vector3d rgb = value.vector3();
+    if ((rgb.array() < 0).any() || (rgb.array() > 1).any())
+      value.fail("expected three numbers in [0, 1] (linear RGB)");
+    return rgb.cast<float>();
+  }
+
+  void parseRender(const JsonValue& value) {
+    const JsonObject object = value.object({"size", "samples", "camera", "contact_spheres",
+                                            "contact_color", "contact_radius", "wireframe"});
+    RenderSettings& render = scene_.render;
+    if (auto size = object.find("size")) {
+      const std::vector<JsonValue> sides = size->array();
+      if (sides.size() != 2) size->fail("expected [width, height]");
+      render.width = int(sides[0].integerIn(16, 16384));
+      render.height = int(sides[1].integerIn(16, 16384));
+    }
+    if (auto samples = object.find("samples")) render.samples = int(samples->integerIn(1, 16));
+    if (auto camera = object.find("camera")) {
+      const JsonObject c = camera->object({"position", "target", "fov"});
+      if (auto position = c.find("position"))
+        render.cameraPosition = position->vector3().cast<float>();
+      if (auto target = c.find("target")) render.cameraTarget = target->vector3().cast<float>();
+      if (auto fov = c.find("fov")) render.fovDegrees = float(fov->numberIn(1, 170));
+      if (render.cameraPosition.has_value() != render.cameraTarget.has_value())
+        camera->fail("expected both 'position' and 'target', or neither (automatic framing)");
+    }
+    if (auto spheres = object.find("contact_spheres")) render.contactSpheres = spheres->boolean();
+    if (auto color = object.find("contact_color")) render.contactColor = colour(*color);
+    if (auto radius = object.find("contact_radius"))
+      render.contactRadius = float(radius->numberAbove(0));
+    if (auto wireframe = object.find("wireframe")) render.wireframe = wireframe->boolean();
   }
 
   void parseOutput(const JsonValue& value) {

@@ -3,6 +3,7 @@
 /// mesh dropped on the ground. All three produce the same SceneFile.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,9 +23,24 @@ struct OutputOptions {
   bool vdb = false;       ///< write each frame as OpenVDB grids
 };
 
+/// How the scene asks to be rendered; unset values keep the renderer's defaults. Plain values, so
+/// importers know nothing of the renderer.
+struct RenderSettings {
+  std::optional<int> width, height;
+  std::optional<int> samples;
+  std::optional<Vec3f> cameraPosition, cameraTarget;
+  std::optional<float> fovDegrees;
+  std::optional<bool> contactSpheres;
+  std::optional<Vec3f> contactColor;
+  std::optional<float> contactRadius;
+  std::optional<bool> wireframe;
+  std::vector<std::optional<Vec3f>> bodyColors;  ///< per body of setup.bodies, linear RGB 0..1
+};
+
 struct SceneFile {
   SceneSetup setup;
   OutputOptions output;
+  RenderSettings render;
   std::vector<std::string> notes;  ///< what loading did that the user should hear about
 };
 

@@ -280,6 +280,12 @@ std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, i
   return Eigen::Vector2f(0.5f * (x + 1) * float(width), 0.5f * (1 - y) * float(height));
 }
 
+Vec3f bodyColor(const RenderOptions& options, std::size_t index) {
+  if (index < options.bodyColors.size() && options.bodyColors[index].x() >= 0)
+    return options.bodyColors[index];
+  return bodyColor(index);
+}
+
 Vec3f bodyColor(std::size_t index) {
   // Hues a golden-ratio turn apart never repeat and stay far from their neighbours.
   const float hue = std::fmod(0.58f + 0.618034f * float(index), 1.0f);
@@ -598,7 +604,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   }
   uniform(gl.surfaceProgram, "uSpecular", 0.25f);
   for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    uniform(gl.surfaceProgram, "uColor", bodyColor(b));
+    uniform(gl.surfaceProgram, "uColor", bodyColor(options_, b));
     glBindVertexArray(gl.bodies[b].vao);
     glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
   }
@@ -613,7 +619,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     uniform(gl.surfaceProgram, "uFlat", 1);
     for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-      uniform(gl.surfaceProgram, "uColor", Vec3f(bodyColor(b) * 0.3f));
+      uniform(gl.surfaceProgram, "uColor", Vec3f(bodyColor(options_, b) * 0.3f));
       glBindVertexArray(gl.bodies[b].vao);
       glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
     }

@@ -33,6 +33,8 @@ struct RenderOptions {
   Vec3f contactColor = Vec3f::Constant(0.55f);  ///< linear RGB, 0..1
   float contactRadius = 0;                      ///< m; 0: 1.5% of the scene's size
   bool wireframe = false;                       ///< draw the bodies' edges over their surfaces
+  /// Per body, linear RGB 0..1; bodies without an entry (or with a negative red) take the palette.
+  std::vector<Vec3f> bodyColors;
   EglOptions egl;
 };
 
@@ -74,6 +76,8 @@ RenderScene makeRenderScene(const World& world, const RenderOptions& options);
 
 /// The per-body colour of body `index`: golden-ratio hue steps at soft saturation, linear RGB.
 Vec3f bodyColor(std::size_t index);
+/// Body `index`'s colour from `options.bodyColors` when given there, else bodyColor(index).
+Vec3f bodyColor(const RenderOptions& options, std::size_t index);
 
 /// Owns an EGL context (current on the thread that constructs it) and the GL objects of one scene.
 /// Every call must come from that thread.

@@ -317,8 +317,16 @@ TEST_F(CliTest, RenderedFramesMatchTheGoldenFrames) {
     const std::string name = std::string("fig5_ground_") + frame + ".png";
     EXPECT_EQ(compareFrames(golden(name), folder_ / "fig5/png" / name), 0) << name;
   }
-  // A change in what a frame shows must fail: the balls one frame further on.
+  // A change in what a frame shows must fail: the balls one frame further on, a moved camera.
   EXPECT_EQ(compareFrames(golden("default_0060.png"), folder_ / "default/png/default_0061.png"), 1);
+  nlohmann::json moved = nlohmann::json::parse(readFile(examples() / "default.json"));
+  moved["render"] = {{"camera", {{"position", {1.0, 2.5, 7.0}}, {"target", {0.0, 1.0, 0.0}}}}};
+  const fs::path movedScene = writeScene("default.json", moved.dump());
+  const Result run =
+      runSoftbake("run " + quoted(movedScene.string()) + " --size 320x240 --frames 1 -q -o " +
+                  quoted((folder_ / "moved").string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_EQ(compareFrames(golden("default_0001.png"), folder_ / "moved/png/default_0001.png"), 1);
 }
 
 TEST_F(CliTest, RenderingIsByteIdenticalForOneAndTwoThreads) {

@@ -176,10 +176,10 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
        "scene.json: bodies[1].pins.boxes[0]: expected min <= max on every axis"},
       {two + R"("pins": {"boxes": [{"min": [0, 0, 0]}]}}]})",
        "scene.json: bodies[1].pins.boxes[0]: missing key 'max'"},
-      {two + R"("colour": "red"}]})",
-       "scene.json: bodies[1]: unknown key 'colour' (valid keys: name, mesh, merge_meshes, "
+      {two + R"("shininess": 2}]})",
+       "scene.json: bodies[1]: unknown key 'shininess' (valid keys: name, mesh, merge_meshes, "
        "transform, "
-       "material, mass, velocity, pins, self_collision)"},
+       "material, mass, velocity, pins, self_collision, color)"},
       {R"({"bodies": [{"name": "x"}]})", "scene.json: bodies[0]: missing key 'mesh'"},
       {R"({"bodies": [{"mesh": 7}]})",
        "scene.json: bodies[0].mesh: expected string (a mesh file) or object (a primitive)"},
@@ -198,7 +198,8 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
       {R"([])", "scene.json: expected object"},
       {R"({"name": 5, "bodies": []})", "scene.json: name: expected string"},
       {R"({"version": 2})",
-       "scene.json: unknown key 'version' (valid keys: name, settings, bodies, colliders, output)"},
+       "scene.json: unknown key 'version' (valid keys: name, settings, bodies, colliders, output, "
+       "render)"},
       {oneBody("").insert(1, R"("settings": {"fps": 0}, )"),
        "scene.json: settings.fps: expected a number > 0"},
       {oneBody("").insert(1, R"("settings": {"frames": 2.5}, )"),
@@ -243,7 +244,8 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
       {oneBody("").insert(1, R"("output": {"obj": "yes"}, )"),
        "scene.json: output.obj: expected boolean"},
       {oneBody("").insert(1, R"("output": {"ply": true}, )"),
-       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts, png, vdb)"},
+       "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts, png, "
+       "vdb)"},
   };
   for (const Case& c : cases) EXPECT_EQ(sceneError(c.json), c.error) << c.json;
 }
@@ -373,6 +375,39 @@ TEST(SceneFile, CollisionKeyErrorsNameTheKeyPath) {
   EXPECT_THAT(
       sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": 1}]})"),
       ::testing::HasSubstr("bodies[0].self_collision"));
+}
+
+TEST(SceneFile, ReadsTheRenderKeysAndBodyColours) {
+  const SceneFile scene = parse(R"({
+    "bodies": [{"mesh": {"primitive": "icosphere"}, "color": [0.9, 0.2, 0.1]},
+               {"mesh": {"primitive": "icosphere"}}],
+    "render": {"size": [640, 360], "samples": 8, "wireframe": true, "contact_spheres": false,
+               "contact_color": [1, 0, 0], "contact_radius": 0.02,
+               "camera": {"position": [0, 2, 6], "target": [0, 1, 0], "fov": 35}}
+  })");
+  const RenderSettings& render = scene.render;
+  EXPECT_EQ(render.width, std::optional<int>(640));
+  EXPECT_EQ(render.height, std::optional<int>(360));
+  EXPECT_EQ(render.samples, std::optional<int>(8));
+  EXPECT_EQ(render.wireframe, std::optional<bool>(true));
+  EXPECT_EQ(render.contactSpheres, std::optional<bool>(false));
+  ASSERT_TRUE(render.cameraPosition && render.cameraTarget);
+  EXPECT_TRUE(render.cameraPosition->isApprox(Vec3f(0, 2, 6)));
+  EXPECT_FLOAT_EQ(*render.fovDegrees, 35);
+  ASSERT_EQ(render.bodyColors.size(), 2u);
+  EXPECT_TRUE(render.bodyColors[0] && render.bodyColors[0]->isApprox(Vec3f(0.9f, 0.2f, 0.1f)));
+  EXPECT_FALSE(render.bodyColors[1]);
+}
+
+TEST(SceneFile, RenderKeyErrorsNameTheKeyPath) {
+  const std::string body = R"("bodies": [{"mesh": {"primitive": "icosphere"}}])";
+  EXPECT_THAT(sceneError(R"({"render": {"size": [640]}, )" + body + "}"),
+              ::testing::HasSubstr("render.size: expected [width, height]"));
+  EXPECT_THAT(sceneError(R"({"render": {"camera": {"position": [0, 1, 2]}}, )" + body + "}"),
+              ::testing::HasSubstr("render.camera: expected both"));
+  EXPECT_THAT(
+      sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "color": [2, 0, 0]}]})"),
+      ::testing::HasSubstr("bodies[0].color"));
 }
 
 }  // namespace
