@@ -72,6 +72,10 @@ int main(int argc, char** argv) {
                    "VDB voxel size in scene units (default: half the mean edge length)")
       ->check(CLI::PositiveNumber);
   runApp->add_flag("--vdb-fog", run.vdbFog, "also write a fog volume (density) per body");
+  runApp
+      ->add_option("--vdb-compression", run.vdbCompression,
+                   "VDB file compression: zip (default), blosc or none")
+      ->check(CLI::IsMember({"zip", "blosc", "none"}));
   runApp->add_option("--up", run.upAxis, "up axis of the VDB export: y (Houdini) or z (Blender)")
       ->check(CLI::IsMember({"y", "z"}));
   runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")

@@ -91,6 +91,10 @@ VdbOptions vdbOptions(const RunOptions& options, const World& world) {
   if (options.voxelSize) vdb.voxelSize = *options.voxelSize;
   vdb.fog = options.vdbFog;
   if (options.upAxis) vdb.upAxis = (*options.upAxis)[0];
+  if (options.vdbCompression)
+    vdb.compression = *options.vdbCompression == "blosc"  ? VdbOptions::Compression::Blosc
+                      : *options.vdbCompression == "none" ? VdbOptions::Compression::None
+                                                          : VdbOptions::Compression::Zip;
   vdb.fps = world.settings.fps;
   vdb.units = world.settings.units;
   validate(vdb, world);  // before anything is written

@@ -27,6 +27,7 @@ struct RunOptions {
   std::optional<double> voxelSize;
   bool vdbFog = false;
   std::optional<std::string> upAxis;  ///< "y" or "z", for the VDB export
+  std::optional<std::string> vdbCompression;  ///< "zip", "blosc" or "none"
   int threads = 0;                    ///< 0: all cores
   bool quiet = false;
 };

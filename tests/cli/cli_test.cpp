@@ -361,3 +361,22 @@ TEST_F(CliTest, RendererStartFailureIsAClearError) {
   EXPECT_NE(output.find("libegl-mesa0"), std::string::npos) << output;
   EXPECT_NE(output.find("--no-render"), std::string::npos) << output;
 }
+
+TEST_F(CliTest, VdbFramesAreWrittenAndListedInTheManifest) {
+  const fs::path out = folder_ / "out";
+  const Result run =
+      runSoftbake("run --vdb --no-render --frames 2 --up z -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_GT(fs::file_size(out / "vdb/default_0002.vdb"), 1000u);
+  const nlohmann::json manifest = nlohmann::json::parse(readFile(out / "manifest.json"));
+  EXPECT_NE(manifest.dump().find("vdb/default_####.vdb"), std::string::npos);
+}
+
+TEST_F(CliTest, AVoxelSizeThatWouldNotFitInMemoryIsRefusedBeforeAnyWork) {
+  const fs::path out = folder_ / "out";
+  const Result run =
+      runSoftbake("run --vdb --voxel-size 0.00001 --frames 2 -q -o " + quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("voxel"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(out)) << "nothing is written for bad settings";
+}
