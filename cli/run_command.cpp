@@ -175,34 +175,26 @@ int run(const RunOptions& options) {
   const int frames = world.settings.frames;
   Manifest manifest = describeWorld(world, name, frames, scene.output.framePadding);
   std::vector<std::unique_ptr<FrameSink>> sinks;
-  if (scene.output.obj) {
-    removeStaleFrames(options.out / "obj", name, ".obj");
-    auto obj =
-        std::make_unique<ObjSequenceWriter>(world, options.out, name, scene.output.framePadding);
-    manifest.sequences.push_back(obj->sequence());
-    sinks.push_back(std::move(obj));
-  }
-  if (scene.output.contacts) {
-    removeStaleFrames(options.out / "contacts", name, ".json");
-    auto contacts =
-        std::make_unique<ContactWriter>(world, options.out, name, scene.output.framePadding);
-    manifest.sequences.push_back(contacts->sequence());
-    sinks.push_back(std::move(contacts));
-  }
-  if (vdb) {
-    removeStaleFrames(options.out / "vdb", name, ".vdb");
-    auto writer = std::make_unique<VdbSequenceWriter>(world, options.out, name, *vdb,
-                                                      scene.output.framePadding);
-    manifest.sequences.push_back(writer->sequence());
-    sinks.push_back(std::move(writer));
-  }
-  if (scene.output.png) {
-    removeStaleFrames(options.out / "png", name, ".png");
-    auto renderer = std::make_unique<PngSequenceRenderer>(world, options.out, name, render,
-                                                          scene.output.framePadding);
-    manifest.sequences.push_back(renderer->sequence());
-    sinks.push_back(std::move(renderer));
-  }
+  // Each sequence: stale frames of an earlier, longer run go, the manifest lists it, a thread
+  // writes it.
+  auto addSequence = [&](const char* folder, const char* extension, auto sink) {
+    removeStaleFrames(options.out / folder, name, extension);
+    manifest.sequences.push_back(sink->sequence());
+    sinks.push_back(std::move(sink));
+  };
+  const int padding = scene.output.framePadding;
+  if (scene.output.obj)
+    addSequence("obj", ".obj",
+                std::make_unique<ObjSequenceWriter>(world, options.out, name, padding));
+  if (scene.output.contacts)
+    addSequence("contacts", ".json",
+                std::make_unique<ContactWriter>(world, options.out, name, padding));
+  if (vdb)
+    addSequence("vdb", ".vdb",
+                std::make_unique<VdbSequenceWriter>(world, options.out, name, *vdb, padding));
+  if (scene.output.png)
+    addSequence("png", ".png",
+                std::make_unique<PngSequenceRenderer>(world, options.out, name, render, padding));
   FramePipeline pipeline(std::move(sinks), world.particleCount());
 
   std::fflush(stdout);  // the scene summary comes before the progress lines on stderr

@@ -26,9 +26,9 @@ struct RunOptions {
   bool vdb = false;                       ///< write OUT/vdb/<scene>_0001.vdb …
   std::optional<double> voxelSize;
   bool vdbFog = false;
-  std::optional<std::string> upAxis;  ///< "y" or "z", for the VDB export
+  std::optional<std::string> upAxis;          ///< "y" or "z", for the VDB export
   std::optional<std::string> vdbCompression;  ///< "zip", "blosc" or "none"
-  int threads = 0;                    ///< 0: all cores
+  int threads = 0;                            ///< 0: all cores
   bool quiet = false;
 };
 

@@ -134,15 +134,8 @@ void BoxHashBroadPhase::syncSurfaces(const BroadPhaseInput& input) {
   // promises its boxes never change.
   surfaces_.resize(input.surfaces.size());
   for (std::size_t s = 0; s < surfaces_.size(); ++s) {
-    const CollisionSurface& given = input.surfaces[s];
     SurfaceLeaves& mine = surfaces_[s];
-    if (mine.firstTriangle != given.firstTriangle || mine.triangleCount != given.triangleCount ||
-        mine.moving != given.moving) {
-      mine.firstTriangle = given.firstTriangle;
-      mine.triangleCount = given.triangleCount;
-      mine.moving = given.moving;
-      mine.boxKnown = mine.built = false;
-    }
+    if (mine.adopt(input.surfaces[s])) mine.boxKnown = mine.built = false;
   }
 }
 

@@ -100,9 +100,7 @@ class BoxHashBroadPhase final : public BroadPhase {
 
   /// One surface's subdivision. Kept across steps: a static surface's is built once, a moving
   /// surface's buffers keep their capacity.
-  struct SurfaceLeaves {
-    Index firstTriangle = 0, triangleCount = 0;
-    bool moving = true;
+  struct SurfaceLeaves : broad_phase_detail::CachedSurface {
     bool boxKnown = false;  ///< `box` is current (a static surface's stays current)
     bool built = false;     ///< `leaves` are current (a static surface's stay current)
     Box3 box;               ///< union of the triangle boxes

@@ -86,6 +86,22 @@ inline void addIfCandidate(const BroadPhaseInput& input, Index i, Index j,
   out.push_back(i < j ? TrianglePair{i, j} : TrianglePair{j, i});
 }
 
+/// The surface a broad phase built its per-surface cache (leaves, a tree) for. A static surface's
+/// cache is kept across steps as long as the surface covers the same triangles and stays static.
+struct CachedSurface {
+  Index firstTriangle = 0, triangleCount = 0;
+  bool moving = true;
+  /// Takes over `given`; true when it differs from the surface cached so far.
+  bool adopt(const CollisionSurface& given) {
+    const bool changed = firstTriangle != given.firstTriangle ||
+                         triangleCount != given.triangleCount || moving != given.moving;
+    firstTriangle = given.firstTriangle;
+    triangleCount = given.triangleCount;
+    moving = given.moving;
+    return changed;
+  }
+};
+
 /// Sorts and drops repeats: the one output order every broad phase promises.
 void sortUnique(std::vector<TrianglePair>& pairs);
 

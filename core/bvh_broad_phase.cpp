@@ -38,15 +38,8 @@ void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<Triangle
   // Trees follow the surfaces; one whose triangles or kind changed is rebuilt.
   trees_.resize(input.surfaces.size());
   for (std::size_t s = 0; s < trees_.size(); ++s) {
-    const CollisionSurface& given = input.surfaces[s];
     Tree& tree = trees_[s];
-    if (tree.firstTriangle != given.firstTriangle || tree.triangleCount != given.triangleCount ||
-        tree.moving != given.moving) {
-      tree.firstTriangle = given.firstTriangle;
-      tree.triangleCount = given.triangleCount;
-      tree.moving = given.moving;
-      tree.built = false;
-    }
+    if (tree.adopt(input.surfaces[s])) tree.built = false;
   }
   rebuilt_.assign(trees_.size(), 0);
   tbb::parallel_for(std::size_t(0), trees_.size(), [&](std::size_t s) {

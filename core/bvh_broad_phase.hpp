@@ -40,9 +40,7 @@ class BvhBroadPhase final : public BroadPhase {
   };
 
   /// One surface's tree, nodes in depth-first order, so every child comes after its parent.
-  struct Tree {
-    Index firstTriangle = 0, triangleCount = 0;
-    bool moving = true;
+  struct Tree : broad_phase_detail::CachedSurface {
     bool built = false;
     double looseness = 0;  ///< at the latest build
     std::vector<Node> nodes;

@@ -1,5 +1,5 @@
-// Results must be bit-identical for any thread count: every parallel loop writes its own element and
-// every sum runs in a fixed order.
+// Results must be bit-identical for any thread count: every parallel loop writes its own element
+// and every sum runs in a fixed order.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 

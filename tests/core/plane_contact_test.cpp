@@ -31,7 +31,8 @@ TEST(PlaneContact, CrossingParticleGoesToTheIntersectionPointPlusSkin) {
 }
 
 TEST(PlaneContact, FrictionNeverReversesTheSlide) {
-  World world = singleParticleOverGround(Vec3(0, 0.1f, 0), Vec3(0.01f, -0.1f, 0), Vec3(0.1f, -5, 0));
+  World world =
+      singleParticleOverGround(Vec3(0, 0.1f, 0), Vec3(0.01f, -0.1f, 0), Vec3(0.1f, -5, 0));
   world.planes[0].friction = 1;
   resolvePlaneContacts(world);
   EXPECT_EQ(world.velocity[0].x(), 0);

@@ -10,7 +10,9 @@
 namespace softbake {
 namespace {
 
-double sphereVolume(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r; }
+double sphereVolume(double r) {
+  return 4.0 / 3.0 * std::numbers::pi * r * r * r;
+}
 
 TEST(Volume, IcosphereConvergesToTheSphereAtSecondOrder) {
   // An inscribed polyhedron's volume falls short by O(h²): each subdivision halves h, so the

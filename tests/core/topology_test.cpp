@@ -13,7 +13,8 @@ TEST(Topology, IcosphereIsClosedWithEulerCharacteristicTwo) {
     const MeshTopology topology = buildTopology(mesh.triangles);
     EXPECT_TRUE(topology.closed());
     EXPECT_EQ(topology.edges.size() * 2, mesh.triangles.size() * 3);
-    EXPECT_EQ(long(mesh.positions.size()) - long(topology.edges.size()) + long(mesh.triangles.size()), 2);
+    EXPECT_EQ(
+        long(mesh.positions.size()) - long(topology.edges.size()) + long(mesh.triangles.size()), 2);
     // One bending spring per interior edge; none coincide with an edge on an icosphere.
     EXPECT_EQ(topology.bendPairs.size(), topology.edges.size());
     EXPECT_GT(signedVolume(mesh.positions, mesh.triangles), 0);

@@ -37,11 +37,11 @@ TEST(Weld, SplitCubeBecomesEightParticles) {
 
 TEST(Weld, DropsDegenerateDuplicateAndUnreferenced) {
   auto [positions, triangles] = splitCube();
-  positions.emplace_back(5, 5, 5);                         // unreferenced
-  triangles.push_back({0, 1, 1});                          // repeated vertex
-  triangles.push_back({0, 5, 0});                          // repeated vertex
-  triangles.push_back(triangles[0]);                       // duplicate
-  positions.emplace_back(0.f, 0.5f, 0.f);                  // on the edge 0–1: collinear
+  positions.emplace_back(5, 5, 5);         // unreferenced
+  triangles.push_back({0, 1, 1});          // repeated vertex
+  triangles.push_back({0, 5, 0});          // repeated vertex
+  triangles.push_back(triangles[0]);       // duplicate
+  positions.emplace_back(0.f, 0.5f, 0.f);  // on the edge 0–1: collinear
   triangles.push_back({0, 1, Index(positions.size() - 1)});
   const WeldedMesh welded = weldByPosition(positions, triangles);
   EXPECT_EQ(welded.triangles.size(), 12u);
@@ -57,7 +57,8 @@ TEST(Weld, MatchesBruteForceOnANoisyCloud) {
   std::mt19937 random(7);
   std::uniform_real_distribution<float> coordinate(-1, 1);
   std::vector<Vec3f> points;
-  for (int i = 0; i < 400; ++i) points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  for (int i = 0; i < 400; ++i)
+    points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
   std::vector<Vec3f> positions;
   std::vector<Triangle> triangles;
   // Each triangle's corners are copies of cloud points, nudged far below the weld tolerance.
@@ -67,14 +68,16 @@ TEST(Weld, MatchesBruteForceOnANoisyCloud) {
     Triangle tri;
     for (int c = 0; c < 3; ++c) {
       tri[c] = Index(positions.size());
-      positions.push_back(points[pick(random)] + Vec3f(nudge(random), nudge(random), nudge(random)));
+      positions.push_back(points[pick(random)] +
+                          Vec3f(nudge(random), nudge(random), nudge(random)));
     }
     triangles.push_back(tri);
   }
   const WeldedMesh welded = weldByPosition(positions, triangles);
   for (std::size_t a = 0; a < positions.size(); ++a)
     for (std::size_t b = a + 1; b < positions.size(); ++b) {
-      if (welded.renderToParticle[a] == kNoParticle || welded.renderToParticle[b] == kNoParticle) continue;
+      if (welded.renderToParticle[a] == kNoParticle || welded.renderToParticle[b] == kNoParticle)
+        continue;
       const bool close = (positions[a] - positions[b]).norm() < 1e-6f;
       ASSERT_EQ(close, welded.renderToParticle[a] == welded.renderToParticle[b]) << a << " " << b;
     }
