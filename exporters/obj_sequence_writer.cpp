@@ -38,6 +38,20 @@ void appendLine(std::string& buffer, const char* begin, const char* end) {
   buffer.append(begin, std::size_t(end - begin));
 }
 
+/// "v x y z\n" or "vn x y z\n".
+template <class Vector>
+void appendVectorLine(std::string& buffer, std::string_view statement, const Vector& v) {
+  char line[kMaxLine];
+  char* p = putText(line, statement);
+  p = putNumber(p, v.x());
+  *p++ = ' ';
+  p = putNumber(p, v.y());
+  *p++ = ' ';
+  p = putNumber(p, v.z());
+  *p++ = '\n';
+  appendLine(buffer, line, p);
+}
+
 // OBJ and MTL statements end at whitespace, so a name with spaces would lose its tail; duplicate
 // names would share one material. Both are made harmless here, keeping names readable.
 std::vector<std::string> objectNames(const std::vector<Body>& bodies) {
@@ -256,32 +270,14 @@ void ObjSequenceWriter::formatBody(const Frame& frame, const Body& body, const B
     if (!v.allFinite())
       throw Error(cat("frame ", frame.number, ": body '", body.name, "': particle ", i,
                       " has a non-finite position (", v.x(), ", ", v.y(), ", ", v.z(), ")"));
-    char line[kMaxLine];
-    char* p = putText(line, "v ");
-    p = putNumber(p, v.x());
-    *p++ = ' ';
-    p = putNumber(p, v.y());
-    *p++ = ' ';
-    p = putNumber(p, v.z());
-    *p++ = '\n';
-    appendLine(buffer_, line, p);
+    appendVectorLine(buffer_, "v ", v);
   }
   addFormattedSince(begin);
   addFixed(text.texcoords);
 
   begin = buffer_.size();
   computeSmoothNormals(topology_, frame.positions, body, normals_);
-  for (const Vec3f& n : normals_) {
-    char line[kMaxLine];
-    char* p = putText(line, "vn ");
-    p = putNumber(p, n.x());
-    *p++ = ' ';
-    p = putNumber(p, n.y());
-    *p++ = ' ';
-    p = putNumber(p, n.z());
-    *p++ = '\n';
-    appendLine(buffer_, line, p);
-  }
+  for (const Vec3f& n : normals_) appendVectorLine(buffer_, "vn ", n);
   addFormattedSince(begin);
   addFixed(text.faces);
 }
