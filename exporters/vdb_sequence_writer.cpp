@@ -3,13 +3,10 @@
 #include <unistd.h>
 
 #include <openvdb/io/File.h>
-#include <openvdb/math/Proximity.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/tools/LevelSetUtil.h>
-#include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/PointIndexGrid.h>
-#include <openvdb/tree/LeafManager.h>
 #include <cmath>
 #include <mutex>
 #include <set>
@@ -17,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "exporters/atomic_file.hpp"
+#include "exporters/mesh_level_set.hpp"
 #include "exporters/version.hpp"
 
 namespace softbake {
@@ -115,7 +113,7 @@ void validate(const VdbOptions& options, const World& world) {
     throw Error("cannot derive a VDB voxel size: the bodies have no edges; give a voxel size");
 
   // The narrow band holds about (surface area / voxel²) × (2·band + 1) voxels. Per voxel: the
-  // distance (4 bytes) and the closest-triangle index (4), the velocity (12) and fog (4) when
+  // distance (4 bytes) and the mesher's per-leaf scratch (4), the velocity (12) and fog (4) when
   // asked, all doubled for partly filled leaves and the trees' own structure.
   const double bytesPerVoxel =
       2.0 * (8.0 + (options.velocity ? 12.0 : 0.0) + (options.fog ? 4.0 : 0.0));
@@ -152,12 +150,16 @@ VdbSequenceWriter::VdbSequenceWriter(const World& world,
     data.firstParticle = body.firstParticle;
     data.particleCount = body.particleCount;
     data.closed = body.closed;
-    data.triangles.reserve(body.triangleCount);
+    std::vector<MeshLevelSet::TriangleIndices> triangles;
+    triangles.reserve(body.triangleCount);
     for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
       const Triangle& global = world.triangles[t];
-      data.triangles.push_back({global[0] - body.firstParticle, global[1] - body.firstParticle,
-                                global[2] - body.firstParticle});
+      triangles.push_back({std::uint32_t(global[0] - body.firstParticle),
+                           std::uint32_t(global[1] - body.firstParticle),
+                           std::uint32_t(global[2] - body.firstParticle)});
     }
+    data.levelSet =
+        std::make_shared<const MeshLevelSet>(std::move(triangles), body.particleCount, body.closed);
     bodies_.push_back(std::move(data));
   }
   makeDirectories(outputDirectory_ / naming_.folder);
@@ -201,11 +203,9 @@ void VdbSequenceWriter::write(const Frame& frame) {
 
   const openvdb::math::Transform::Ptr transform =
       openvdb::math::Transform::createLinearTransform(voxelSize_);
-  const float band = float(options_.bandWidth);
   openvdb::GridPtrVec grids;
 
-  std::vector<openvdb::Vec3s> points;  // index space
-  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec3s> points, velocities;  // points in index space
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const BodyData& body = bodies_[b];
     points.resize(body.particleCount);
@@ -216,19 +216,16 @@ void VdbSequenceWriter::write(const Frame& frame) {
                         " (particle ", i, "): cannot write its VDB level set"));
       points[i] = openvdb::Vec3s(toOutputAxes(p, up) / voxelSize_);
     }
-    triangles.resize(body.triangles.size());
-    for (std::size_t t = 0; t < triangles.size(); ++t)
-      triangles[t] =
-          openvdb::Vec3I(body.triangles[t][0], body.triangles[t][1], body.triangles[t][2]);
+    if (options_.velocity) {
+      velocities.resize(body.particleCount);
+      for (Index i = 0; i < body.particleCount; ++i)
+        velocities[i] = openvdb::Vec3s(toOutputAxes(frame.velocities[body.firstParticle + i], up));
+    }
+    MeshLevelSet::Grids level = body.levelSet->build(
+        points, options_.velocity ? velocities.data() : nullptr, float(options_.bandWidth),
+        voxelSize_);
 
-    // One pass gives the distance and, for each voxel of the band, its closest triangle.
-    const openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> mesh(
-        points, triangles);
-    openvdb::Int32Grid::Ptr closest = openvdb::Int32Grid::create(openvdb::Int32(-1));
-    const int flags = body.closed ? 0 : openvdb::tools::UNSIGNED_DISTANCE_FIELD;
-    openvdb::FloatGrid::Ptr surface = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
-        mesh, *transform, band, band, flags, closest.get());
-    surface->setTransform(transform);
+    openvdb::FloatGrid::Ptr surface = level.distance;
     surface->setName(gridName(b, body.closed ? "surface" : "surface_udf"));
     addMetadata(*surface, body.name);
     grids.push_back(surface);
@@ -240,39 +237,11 @@ void VdbSequenceWriter::write(const Frame& frame) {
       grids.push_back(fog);
     }
 
-    if (options_.velocity) {
-      // The surface's topology, each active voxel given the velocity of its closest surface point:
-      // the closest triangle's three particle velocities, weighted by the point's barycentrics.
-      auto velocityTree = std::make_shared<openvdb::Vec3STree>(
-          surface->tree(), openvdb::Vec3s(0.0f), openvdb::TopologyCopy());
-      openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(*velocityTree);
-      const Vec3* velocities = frame.velocities.data() + body.firstParticle;
-      leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
-        openvdb::Int32Grid::ConstAccessor lookup = closest->getConstAccessor();
-        for (auto voxel = leaf.beginValueOn(); voxel; ++voxel) {
-          openvdb::Int32 prim = -1;
-          lookup.probeValue(voxel.getCoord(), prim);
-          if (prim < 0 || std::size_t(prim) >= triangles.size()) {
-            voxel.setValueOff();
-            continue;
-          }
-          const openvdb::Vec3I& t = triangles[std::size_t(prim)];
-          openvdb::Vec3d uvw;
-          openvdb::math::closestPointOnTriangleToPoint(
-              openvdb::Vec3d(points[t[0]]), openvdb::Vec3d(points[t[1]]),
-              openvdb::Vec3d(points[t[2]]), voxel.getCoord().asVec3d(), uvw);
-          const openvdb::Vec3d v = uvw[0] * toOutputAxes(velocities[t[0]], up) +
-                                   uvw[1] * toOutputAxes(velocities[t[1]], up) +
-                                   uvw[2] * toOutputAxes(velocities[t[2]], up);
-          voxel.setValue(openvdb::Vec3s(v));
-        }
-      });
-      openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create(velocityTree);
-      velocity->setTransform(transform);
-      velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
-      velocity->setName(gridName(b, "vel"));
-      addMetadata(*velocity, body.name);
-      grids.push_back(velocity);
+    if (level.velocity) {
+      level.velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+      level.velocity->setName(gridName(b, "vel"));
+      addMetadata(*level.velocity, body.name);
+      grids.push_back(level.velocity);
     }
   }
 

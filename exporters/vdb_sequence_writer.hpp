@@ -25,6 +25,7 @@
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,8 @@
 #include "exporters/manifest.hpp"
 
 namespace softbake {
+
+class MeshLevelSet;
 
 struct VdbOptions {
   /// World units per voxel. 0: automatic, half the mean edge length of the bodies at rest. Finer
@@ -94,7 +97,7 @@ class VdbSequenceWriter : public FrameSink {
   struct BodyData {
     std::string name;  ///< sanitized: letters, digits and '_'
     Index firstParticle = 0, particleCount = 0;
-    std::vector<Triangle> triangles;  ///< body-local particle indices
+    std::shared_ptr<const MeshLevelSet> levelSet;  ///< its triangles, body-local
     bool closed = false;
   };
 

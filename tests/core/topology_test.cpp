@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
+
+#include "core/cube_sphere.hpp"
 #include "core/icosphere.hpp"
 
 namespace softbake {
@@ -19,6 +22,25 @@ TEST(Topology, IcosphereIsClosedWithEulerCharacteristicTwo) {
     EXPECT_EQ(topology.bendPairs.size(), topology.edges.size());
     EXPECT_GT(signedVolume(mesh.positions, mesh.triangles), 0);
   }
+}
+
+TEST(Topology, CubeSphereIsClosedOutwardAndNearTheSphere) {
+  for (int divisions : {1, 3, 9, 29}) {
+    const TriangleMesh mesh = makeCubeSphere(divisions, 2.0f, Vec3f(1, -1, 0.5f));
+    EXPECT_EQ(mesh.triangles.size(), std::size_t(12 * divisions * divisions));
+    EXPECT_EQ(mesh.positions.size(), std::size_t(6 * divisions * divisions + 2));
+    const MeshTopology topology = buildTopology(mesh.triangles);
+    EXPECT_TRUE(topology.closed()) << divisions;
+    for (const Vec3f& p : mesh.positions) EXPECT_NEAR((p - Vec3f(1, -1, 0.5f)).norm(), 2.0f, 1e-5f);
+    const double volume = signedVolume(mesh.positions, mesh.triangles);
+    const double sphere = 4.0 / 3.0 * std::numbers::pi * 8.0;
+    EXPECT_GT(volume, 0);
+    // Chords cut the sphere by O(h²): 1.3% at 9 divisions, a ninth of that at 29.
+    EXPECT_NEAR(volume, sphere, 1.5 / (divisions * divisions) * sphere) << divisions;
+  }
+  EXPECT_EQ(cubeSphereDivisions(10000), 29);
+  EXPECT_EQ(cubeSphereDivisions(1000000), 289);
+  EXPECT_EQ(cubeSphereDivisions(0), 1);
 }
 
 TEST(Topology, RemovingATriangleOpensThreeBoundaryEdges) {
