@@ -69,10 +69,10 @@ NearestPoint nearestOnTriangle(const Vec3s& p, const Vec3s& a, const Vec3s& b, c
 /// What the leaf fill reads per triangle, gathered once per frame.
 struct TriangleGeometry {
   Vec3s a, b, c;
-  Vec3s normal;             ///< unit, or zero for a degenerate triangle
-  Vec3s centre;             ///< of the corners; with `radius`, a sphere holding the triangle
+  Vec3s normal;  ///< unit, or zero for a degenerate triangle
+  Vec3s centre;  ///< of the corners; with `radius`, a sphere holding the triangle
   float radius;
-  openvdb::Coord lo, hi;    ///< the voxels that can lie within the band of it (inclusive)
+  openvdb::Coord lo, hi;  ///< the voxels that can lie within the band of it (inclusive)
 };
 
 std::uint64_t leafKey(const openvdb::Coord& leaf) {
@@ -238,13 +238,20 @@ MeshLevelSet::Grids MeshLevelSet::build(const std::vector<openvdb::Vec3s>& point
   }
   const auto pseudonormal = [&](std::uint32_t t, Feature feature) -> Vec3s {
     switch (feature) {
-      case Feature::Face: return geometry[t].normal;
-      case Feature::VertexA: return vertexNormal[triangles_[t][0]];
-      case Feature::VertexB: return vertexNormal[triangles_[t][1]];
-      case Feature::VertexC: return vertexNormal[triangles_[t][2]];
-      case Feature::EdgeAB: return edgeNormal[edgeOfCorner_[3 * t + 0]];
-      case Feature::EdgeBC: return edgeNormal[edgeOfCorner_[3 * t + 1]];
-      case Feature::EdgeCA: return edgeNormal[edgeOfCorner_[3 * t + 2]];
+      case Feature::Face:
+        return geometry[t].normal;
+      case Feature::VertexA:
+        return vertexNormal[triangles_[t][0]];
+      case Feature::VertexB:
+        return vertexNormal[triangles_[t][1]];
+      case Feature::VertexC:
+        return vertexNormal[triangles_[t][2]];
+      case Feature::EdgeAB:
+        return edgeNormal[edgeOfCorner_[3 * t + 0]];
+      case Feature::EdgeBC:
+        return edgeNormal[edgeOfCorner_[3 * t + 1]];
+      case Feature::EdgeCA:
+        return edgeNormal[edgeOfCorner_[3 * t + 2]];
     }
     return geometry[t].normal;
   };
@@ -309,8 +316,9 @@ MeshLevelSet::Grids MeshLevelSet::build(const std::vector<openvdb::Vec3s>& point
         if (nearest[offset] < 0) continue;
         const std::uint32_t t = std::uint32_t(nearest[offset]);
         const TriangleGeometry& g = geometry[t];
-        const Vec3s p = FloatLeaf::offsetToLocalCoord(offset).offsetBy(origin.x(), origin.y(),
-                                                                       origin.z()).asVec3s();
+        const Vec3s p = FloatLeaf::offsetToLocalCoord(offset)
+                            .offsetBy(origin.x(), origin.y(), origin.z())
+                            .asVec3s();
         const NearestPoint q = nearestOnTriangle(p, g.a, g.b, g.c);
         const Vec3s away = p - (q.u * g.a + q.v * g.b + q.w * g.c);
         float value = std::sqrt(best[offset]);
@@ -318,8 +326,7 @@ MeshLevelSet::Grids MeshLevelSet::build(const std::vector<openvdb::Vec3s>& point
         distance->setValueOn(offset, float(value * voxelSize));
         if (velocity) {
           const TriangleIndices& corners = triangles_[t];
-          velocity->setValueOn(offset, q.u * velocities[corners[0]] +
-                                           q.v * velocities[corners[1]] +
+          velocity->setValueOn(offset, q.u * velocities[corners[0]] + q.v * velocities[corners[1]] +
                                            q.w * velocities[corners[2]]);
         }
         any = true;

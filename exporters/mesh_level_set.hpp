@@ -9,10 +9,11 @@
 /// and growing it a voxel at a time through sparse-tree lookups, and at a voxel of 1/200 of a
 /// 100k-face body spends ~1.4 CPU-seconds a frame on that (most of it in tree access, not in the
 /// geometry). Here the triangles are sorted into the 8³ leaves their band touches, and each leaf
-/// is filled in flat arrays, one leaf per task, so the cost is the geometry itself. The pseudonormal
-/// sign is exact for closed, edge-manifold meshes that do not cross themselves; where a deformed
-/// body does cross itself, a voxel between the crossing sheets takes the sign of its nearest sheet
-/// (meshToVolume smooths such spots instead). The result is identical for any thread count.
+/// is filled in flat arrays, one leaf per task, so the cost is the geometry itself. The
+/// pseudonormal sign is exact for closed, edge-manifold meshes that do not cross themselves; where
+/// a deformed body does cross itself, a voxel between the crossing sheets takes the sign of its
+/// nearest sheet (meshToVolume smooths such spots instead). The result is identical for any thread
+/// count.
 ///
 /// Index space: voxel (i, j, k) is centred at (i, j, k) · voxelSize in world space, as OpenVDB's
 /// linear transforms place it; points are given already divided by the voxel size.

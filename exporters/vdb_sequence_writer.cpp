@@ -221,9 +221,9 @@ void VdbSequenceWriter::write(const Frame& frame) {
       for (Index i = 0; i < body.particleCount; ++i)
         velocities[i] = openvdb::Vec3s(toOutputAxes(frame.velocities[body.firstParticle + i], up));
     }
-    MeshLevelSet::Grids level = body.levelSet->build(
-        points, options_.velocity ? velocities.data() : nullptr, float(options_.bandWidth),
-        voxelSize_);
+    MeshLevelSet::Grids level =
+        body.levelSet->build(points, options_.velocity ? velocities.data() : nullptr,
+                             float(options_.bandWidth), voxelSize_);
 
     openvdb::FloatGrid::Ptr surface = level.distance;
     surface->setName(gridName(b, body.closed ? "surface" : "surface_udf"));

@@ -39,9 +39,7 @@ IndexMesh makeTorus(float major, float minor, int rings, int sides) {
       mesh.points.emplace_back(r * std::cos(u) + 0.31f, minor * std::sin(v) + 0.17f,
                                r * std::sin(u) - 0.23f);
     }
-  const auto at = [&](int i, int j) {
-    return std::uint32_t((i % rings) * sides + (j % sides));
-  };
+  const auto at = [&](int i, int j) { return std::uint32_t((i % rings) * sides + (j % sides)); };
   for (int i = 0; i < rings; ++i)
     for (int j = 0; j < sides; ++j) {
       mesh.triangles.push_back({at(i, j), at(i, j + 1), at(i + 1, j)});
@@ -55,7 +53,8 @@ IndexMesh makeBumpySphere(float radius) {
   const TriangleMesh sphere = makeIcosphere(4, 1.0f);
   IndexMesh mesh;
   for (const Vec3f& p : sphere.positions) {
-    const float bump = 1 + 0.25f * std::sin(5 * p.x()) * std::cos(4 * p.y() + 1) * std::sin(3 * p.z());
+    const float bump =
+        1 + 0.25f * std::sin(5 * p.x()) * std::cos(4 * p.y() + 1) * std::sin(3 * p.z());
     mesh.points.emplace_back(radius * bump * p.x(), radius * bump * p.y(), radius * bump * p.z());
   }
   for (const Triangle& t : sphere.triangles)
