@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/run_command.hpp"
 
@@ -103,6 +104,45 @@ int main(int argc, char** argv) {
       "--diff", compare.diff,
       "write a difference image (a folder of them for folders) where frames differ");
 
+  softbake::BenchOptions bench;
+  CLI::App* benchApp = app.add_subcommand(
+      "bench",
+      "Time a scene's simulation with no output files: per-stage median and p95 per step, "
+      "contacts, peak memory and a machine-readable line per broad phase. SCENE is a scene "
+      ".json, a mesh file or a built-in scene: default, balls1k, balls10k, balls100k, balls1m.");
+  benchApp->add_option("scene", bench.input, "scene .json, mesh file or built-in scene name")
+      ->required();
+  CLI::Option* benchFrames =
+      benchApp->add_option("--frames", bench.frames, "frames to simulate (overrides the scene)")
+          ->check(CLI::Range(2, 10000000));
+  benchApp->add_option("--steps", bench.steps, "simulate exactly this many substeps")
+      ->check(CLI::Range(1L, 1000000000L))
+      ->excludes(benchFrames);
+  benchApp->add_option("--substeps", bench.substeps, "substeps per frame, or 'auto'")
+      ->check([](const std::string& value) -> std::string {
+        if (value == "auto") return {};
+        try {
+          std::size_t used = 0;
+          const int count = std::stoi(value, &used);
+          if (used == value.size() && count >= 1) return {};
+        } catch (...) {
+        }
+        return "expected 'auto' or a whole number >= 1, got '" + value + "'";
+      });
+  benchApp
+      ->add_option("--broadphase", bench.broadPhases,
+                   "broad phases to run one after the other: sbhash, spatialhash, bvh, brute "
+                   "(comma-separated; default: the scene's)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"sbhash", "spatialhash", "bvh", "brute"}));
+  benchApp->add_option("-j,--threads", bench.threads, "worker threads (0: all cores)")
+      ->check(CLI::Range(0, 4096));
+  benchApp->add_option("--csv", bench.csv, "write one row per step and broad phase to this file");
+  benchApp->add_flag("--with-exports", bench.withExports,
+                     "also time the OBJ and VDB writers and the PNG renderer per frame");
+  benchApp->add_option("-o,--out", bench.out,
+                       "folder for the --with-exports files (default: a temporary one, removed)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -116,5 +156,6 @@ int main(int argc, char** argv) {
     return softbake::runCommand(run);
   }
   if (compareApp->parsed()) return softbake::compareCommand(compare);
+  if (benchApp->parsed()) return softbake::benchCommand(bench);
   return 0;
 }

@@ -8,7 +8,9 @@
 #include <regex>
 #include <system_error>
 
+#include "cli/command_errors.hpp"
 #include "cli/progress_display.hpp"
+#include "cli/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
@@ -25,17 +27,6 @@ namespace softbake {
 namespace {
 
 namespace fs = std::filesystem;
-
-SceneFile loadInput(const std::string& input) {
-  if (input.empty()) return defaultScene();
-  const fs::path path(input);
-  std::error_code error;
-  if (!fs::exists(path, error)) throw Error(cat(input, ": no such file"));
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".json") return loadSceneFile(path);
-  return sceneFromMeshFile(path);
-}
 
 void applyOverrides(const RunOptions& options, SceneFile& scene) {
   SimulationSettings& settings = scene.setup.settings;
@@ -138,7 +129,7 @@ int run(const RunOptions& options) {
   if (options.threads > 0)
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
 
-  SceneFile scene = loadInput(options.input);
+  SceneFile scene = loadSceneInput(options.input);
   applyOverrides(options, scene);
   for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
 
@@ -245,19 +236,7 @@ int run(const RunOptions& options) {
 }  // namespace
 
 int runCommand(const RunOptions& options) {
-  try {
-    return run(options);
-  } catch (const Error& error) {
-    std::fflush(stdout);
-    std::fprintf(stderr, "\nsoftbake: error: %s\n", error.what());
-  } catch (const std::filesystem::filesystem_error& error) {
-    std::fflush(stdout);
-    std::fprintf(stderr, "\nsoftbake: error: %s\n", error.what());
-  } catch (const std::bad_alloc&) {
-    std::fflush(stdout);
-    std::fprintf(stderr, "\nsoftbake: error: out of memory; try a smaller scene\n");
-  }
-  return 1;
+  return reportingErrors([&] { return run(options); });
 }
 
 }  // namespace softbake

@@ -71,9 +71,10 @@ CollisionDetector::CollisionDetector(const CollisionSettings& settings)
     : broadPhase_(
           makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {}
 
-void CollisionDetector::detect(const World& world) {
+void CollisionDetector::detect(const World& world, StageClock* clock) {
   const CollisionGeometry& geometry = world.collision;
   broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
+  if (clock) clock->lap(Stage::BroadPhase);
 
   // Edge contacts: the multi-pass test on every candidate pair, one slot per pair.
   pairHits_.resize(pairs_.size());
@@ -138,6 +139,7 @@ void CollisionDetector::detect(const World& world) {
       particleContacts_[j] = particleContacts_[j - 1];
     particleContacts_[j] = contact;
   }
+  if (clock) clock->lap(Stage::NarrowPhase);
 }
 
 }  // namespace softbake

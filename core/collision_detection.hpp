@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/stage_timer.hpp"
 #include "core/broad_phase.hpp"
 #include "core/line_triangle.hpp"
 #include "core/scene_setup.hpp"
@@ -43,7 +44,8 @@ class CollisionDetector {
 
   /// Finds the contacts of the substep that just moved the particles from previousPosition to
   /// position. Expects updateCollisionBoxes() to have run.
-  void detect(const World& world);
+  /// `clock`, when given, gets a BroadPhase lap after the pairs and a NarrowPhase lap at the end.
+  void detect(const World& world, StageClock* clock = nullptr);
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sorted by candidate pair, then direction and edge.

@@ -23,16 +23,21 @@ Simulator::Simulator(World world)
 }
 
 void Simulator::step(int frame) {
+  StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
   computeSpringForces(world_);
   computeVolumes(world_);
   computePressureForces(world_);
+  clock.lap(Stage::Forces);
   if (!integrate(world_, Scalar(substeps_.timeStep))) reportBlowUp(frame);
+  clock.lap(Stage::Integration);
   const ResponseMode response = world_.settings.collisions.response;
   if (collides_) {
     updateCollisionBoxes(world_);
-    detector_.detect(world_);
+    clock.lap(Stage::Boxes);
+    detector_.detect(world_, &clock);
     const CollisionResponseStats responses =
         respondToCollisions(world_, detector_, response, contacts_);
+    clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
     stats_.responses.particleResponses += responses.particleResponses;
@@ -40,6 +45,7 @@ void Simulator::step(int frame) {
     stats_.responses.edgePushes += responses.edgePushes;
   }
   stats_.planeContacts += resolvePlaneContacts(world_, response != ResponseMode::None);
+  clock.lap(Stage::Planes);
 }
 
 void Simulator::advanceToFrame(int frame) {

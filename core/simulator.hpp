@@ -12,6 +12,7 @@
 #include "core/collision_response.hpp"
 #include "core/contact.hpp"
 #include "core/stability.hpp"
+#include "core/stage_timer.hpp"
 #include "core/world.hpp"
 
 namespace softbake {
@@ -33,6 +34,11 @@ class Simulator {
   World& world() { return world_; }
   const SubstepChoice& substeps() const { return substeps_; }
   const StepStats& lastFrameStats() const { return stats_; }
+  /// Broad-phase pairs of the latest substep.
+  std::size_t lastStepCandidatePairs() const { return detector_.candidatePairs().size(); }
+  /// Time each stage of every following substep (off by default); read with lastStepTimes().
+  void measureStages(bool on) { measureStages_ = on; }
+  const StageTimes& lastStepTimes() const { return stepTimes_; }
   /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f.
   const std::vector<Contact>& contacts() const { return contacts_; }
   /// Whether the scene has anything the collision pipeline could find (two surfaces, or one
@@ -55,6 +61,8 @@ class Simulator {
   CollisionDetector detector_;
   std::vector<Contact> contacts_;
   bool collides_ = false;
+  bool measureStages_ = false;
+  StageTimes stepTimes_;
 };
 
 }  // namespace softbake

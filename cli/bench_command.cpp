@@ -1,0 +1,244 @@
+#include "cli/bench_command.hpp"
+
+#include <stdlib.h>
+#include <sys/resource.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include "cli/command_errors.hpp"
+#include "cli/scene_input.hpp"
+#include "core/error.hpp"
+#include "core/simulator.hpp"
+#include "core/text.hpp"
+#include "exporters/atomic_file.hpp"
+#include "exporters/obj_sequence_writer.hpp"
+#include "exporters/vdb_sequence_writer.hpp"
+#include "render/png_sequence_renderer.hpp"
+
+namespace softbake {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double milliseconds(std::int64_t nanoseconds) { return double(nanoseconds) * 1e-6; }
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+struct Spread {
+  double median = 0, p95 = 0;
+};
+
+/// Median and 95th percentile (nearest rank) of `values`, which it reorders.
+Spread spread(std::vector<double>& values) {
+  if (values.empty()) return {};
+  const auto at = [&](double fraction) {
+    const std::size_t rank =
+        std::min(values.size() - 1, std::size_t(fraction * double(values.size())));
+    std::nth_element(values.begin(), values.begin() + long(rank), values.end());
+    return values[rank];
+  };
+  return {at(0.5), at(0.95)};
+}
+
+double peakResidentMiB() {
+  rusage usage{};
+  ::getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+/// One writer's cost per frame, measured on the bench thread.
+struct ExportTiming {
+  std::unique_ptr<FrameSink> sink;
+  double seconds = 0;
+  int frames = 0;
+};
+
+/// A temporary folder for the exports, removed with everything in it.
+class ScratchFolder {
+ public:
+  ScratchFolder() {
+    std::string pattern = (fs::temp_directory_path() / "softbake-bench-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) throw Error("cannot create a temporary folder for exports");
+    path_ = pattern;
+  }
+  ~ScratchFolder() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+int bench(const BenchOptions& options) {
+  std::optional<tbb::global_control> threadLimit;
+  if (options.threads > 0)
+    threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
+  const int threads = tbb::this_task_arena::max_concurrency();
+
+  const SceneFile loaded = loadSceneInput(options.input);
+  std::vector<BroadPhaseKind> kinds;
+  for (const std::string& name : options.broadPhases) {
+    BroadPhaseKind kind{};
+    if (!parseBroadPhase(name, kind))
+      throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '", name,
+                      "'"));
+    kinds.push_back(kind);
+  }
+  if (kinds.empty()) kinds.push_back(loaded.setup.settings.collisions.broadPhase);
+
+  std::string csv =
+      "broadphase,step,frame,forces_ms,integration_ms,boxes_ms,broad_phase_ms,narrow_phase_ms,"
+      "response_ms,planes_ms,step_ms,pairs,contacts\n";
+  std::optional<ScratchFolder> scratch;
+  if (options.withExports && options.out.empty()) scratch.emplace();
+  const fs::path exportFolder = scratch ? scratch->path() : options.out;
+
+  for (BroadPhaseKind kind : kinds) {
+    SceneFile scene = loaded;
+    SimulationSettings& settings = scene.setup.settings;
+    if (options.frames) settings.frames = *options.frames;
+    if (options.substeps)
+      settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
+    settings.collisions.broadPhase = kind;
+    const std::string broadPhase(broadPhaseName(kind));
+
+    Simulator simulator(buildWorld(scene.setup));
+    const World& world = simulator.world();
+    std::size_t faces = 0;
+    for (const Body& body : world.bodies) faces += body.triangleCount;
+    const int substeps = simulator.substeps().substeps;
+    const long requested = options.steps ? *options.steps : long(settings.frames - 1) * substeps;
+    if (requested < 1) throw Error("nothing to run: give --steps or at least 2 --frames");
+    const std::size_t steps = std::size_t(requested);
+    std::printf(
+        "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
+        "%s broad phase, %d threads\n",
+        scene.setup.name.c_str(), faces, world.bodies.size(), world.particleCount(), steps,
+        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(), threads);
+    std::fflush(stdout);
+
+    std::vector<ExportTiming> exports;
+    if (options.withExports) {
+      const std::string& name = scene.setup.name;
+      exports.push_back({std::make_unique<ObjSequenceWriter>(world, exportFolder, name)});
+      VdbOptions vdb;
+      vdb.fps = settings.fps;
+      exports.push_back({std::make_unique<VdbSequenceWriter>(world, exportFolder, name, vdb)});
+      exports.push_back({std::make_unique<PngSequenceRenderer>(world, exportFolder, name,
+                                                               RenderOptions{})});
+    }
+    Frame frame;
+
+    // Everything per step is stored first and summarised after, so the loop only records.
+    std::vector<StageTimes> times(steps);
+    std::vector<std::uint32_t> pairs(steps), contacts(steps);
+    simulator.measureStages(true);
+    double simulationSeconds = 0;
+    for (std::size_t s = 0; s < steps; ++s) {
+      const int frameNumber = 2 + int(s / std::size_t(substeps));
+      const Clock::time_point start = Clock::now();
+      simulator.step(frameNumber);
+      simulationSeconds += secondsSince(start);
+      times[s] = simulator.lastStepTimes();
+      pairs[s] = std::uint32_t(simulator.lastStepCandidatePairs());
+      contacts[s] = std::uint32_t(simulator.contacts().size());
+      if (!exports.empty() && (s + 1) % std::size_t(substeps) == 0) {
+        frame.number = frameNumber;
+        frame.time = (frameNumber - 1) / settings.fps;
+        frame.positions = world.position;
+        frame.velocities = world.velocity;
+        frame.contacts = simulator.contacts();
+        for (ExportTiming& e : exports) {
+          const Clock::time_point exportStart = Clock::now();
+          e.sink->write(frame);
+          e.seconds += secondsSince(exportStart);
+          ++e.frames;
+        }
+      }
+    }
+    for (ExportTiming& e : exports) e.sink->finish();
+
+    // Per stage: median and p95 over the steps, and the share of the total.
+    std::printf("  %-13s %10s %10s %7s\n", "stage", "median ms", "p95 ms", "share");
+    std::int64_t allStages = 0;
+    for (const StageTimes& t : times) allStages += t.total();
+    std::vector<double> values(steps);
+    for (int stage = 0; stage < kStageCount; ++stage) {
+      std::int64_t sum = 0;
+      for (std::size_t s = 0; s < steps; ++s) {
+        values[s] = milliseconds(times[s].nanoseconds[stage]);
+        sum += times[s].nanoseconds[stage];
+      }
+      const Spread stageSpread = spread(values);
+      std::printf("  %-13s %10.4f %10.4f %6.1f%%\n", stageName(Stage(stage)), stageSpread.median,
+                  stageSpread.p95, allStages > 0 ? 100.0 * double(sum) / double(allStages) : 0.0);
+    }
+    for (std::size_t s = 0; s < steps; ++s)
+      values[s] = milliseconds(times[s].total());
+    const Spread step = spread(values);
+    std::printf("  %-13s %10.4f %10.4f\n", "step", step.median, step.p95);
+
+    double contactSum = 0, pairSum = 0;
+    std::uint32_t contactMax = 0;
+    for (std::size_t s = 0; s < steps; ++s) {
+      contactSum += contacts[s];
+      pairSum += pairs[s];
+      contactMax = std::max(contactMax, contacts[s]);
+    }
+    const double contactsPerStep = contactSum / double(steps);
+    std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
+                contactsPerStep, contactMax, pairSum / double(steps));
+    for (const ExportTiming& e : exports) {
+      const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
+      std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(),
+                  perFrame * 1e3, e.frames);
+      if (std::string(e.sink->name()) == "obj" && e.seconds > 0)
+        std::printf(", %.0f MB/s", double(e.sink->bytesWritten()) / e.seconds / 1e6);
+      std::printf("\n");
+    }
+
+    const double stepsPerSecond = double(steps) / simulationSeconds;
+    const double peak = peakResidentMiB();
+    std::printf(
+        "scene=%s faces=%zu broadphase=%s threads=%d steps=%zu steps_per_s=%.1f "
+        "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
+        "bytes_per_face=%.0f\n",
+        scene.setup.name.c_str(), faces, broadPhase.c_str(), threads, steps, stepsPerSecond,
+        step.median, step.p95, contactsPerStep, peak, peak * 1048576.0 / double(faces));
+    std::fflush(stdout);
+
+    if (options.csv)
+      for (std::size_t s = 0; s < steps; ++s) {
+        const StageTimes& t = times[s];
+        csv += cat(broadPhase, ",", s + 1, ",", 2 + s / std::size_t(substeps));
+        for (int stage = 0; stage < kStageCount; ++stage)
+          csv += cat(",", milliseconds(t.nanoseconds[stage]));
+        csv += cat(",", milliseconds(t.total()), ",", pairs[s], ",",
+                   contacts[s], "\n");
+      }
+  }
+  if (options.csv) {
+    writeFileAtomically(*options.csv, csv);
+    std::printf("csv: %s\n", options.csv->string().c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int benchCommand(const BenchOptions& options) {
+  return reportingErrors([&] { return bench(options); });
+}
+
+}  // namespace softbake

@@ -1,0 +1,18 @@
+#include "core/stage_timer.hpp"
+
+namespace softbake {
+
+const char* stageName(Stage stage) {
+  switch (stage) {
+    case Stage::Forces: return "forces";
+    case Stage::Integration: return "integration";
+    case Stage::Boxes: return "boxes";
+    case Stage::BroadPhase: return "broad_phase";
+    case Stage::NarrowPhase: return "narrow_phase";
+    case Stage::Response: return "response";
+    case Stage::Planes: return "planes";
+  }
+  return "unknown";
+}
+
+}  // namespace softbake

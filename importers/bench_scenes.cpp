@@ -1,0 +1,63 @@
+#include "importers/bench_scenes.hpp"
+
+#include <cmath>
+
+namespace softbake {
+
+namespace {
+
+struct BallsScene {
+  const char* name;
+  int balls, subdivisions;
+};
+
+constexpr BallsScene kBallsScenes[] = {
+    {"balls1k", 4, 2}, {"balls10k", 8, 3}, {"balls100k", 20, 4}, {"balls1m", 48, 5}};
+
+}  // namespace
+
+std::vector<std::string> benchSceneNames() {
+  std::vector<std::string> names{"default"};
+  for (const BallsScene& scene : kBallsScenes) names.emplace_back(scene.name);
+  return names;
+}
+
+nlohmann::json ballsSceneJson(std::string_view name, int balls, int subdivisions) {
+  static const char* const kMaterials[] = {"rubber", "jelly", "balloon", "stiff"};
+  const int perLayer = (balls + 1) / 2;
+  const int columns = int(std::ceil(std::sqrt(double(perLayer))));
+  nlohmann::json bodies = nlohmann::json::array();
+  for (int i = 0; i < balls; ++i) {
+    const int layer = i / perLayer, slot = i % perLayer;
+    const int column = slot % columns, row = slot / columns;
+    // Centred grid, 1 m apart; the upper layer sits over the gaps of the lower one.
+    const double x = (column - (columns - 1) / 2.0) + 0.5 * layer;
+    const double z = (row - (columns - 1) / 2.0) + 0.5 * layer;
+    const double y = 0.6 + 1.1 * layer;
+    // Lower layer: each ball heads for its neighbour; upper layer: falls with a slight drift.
+    const double vx = layer == 0 ? (column % 2 == 0 ? 0.5 : -0.5) : 0.1;
+    const double vz = layer == 0 ? (row % 2 == 0 ? 0.3 : -0.3) : -0.1;
+    bodies.push_back({{"name", "ball" + std::to_string(i)},
+                      {"mesh", {{"primitive", "icosphere"},
+                                {"subdivisions", subdivisions},
+                                {"radius", 0.4}}},
+                      {"transform", {{"translate", {x, y, z}}}},
+                      {"material", kMaterials[i % 4]},
+                      {"velocity", {vx, 0.0, vz}}});
+  }
+  return {{"name", std::string(name)},
+          {"settings", {{"fps", 24}, {"frames", 48}, {"substeps", "auto"}}},
+          {"bodies", bodies},
+          {"colliders", {{{"type", "plane"}, {"name", "ground"}}}}};
+}
+
+std::optional<SceneFile> benchScene(std::string_view name) {
+  if (name == "default") return defaultScene();
+  for (const BallsScene& scene : kBallsScenes)
+    if (name == scene.name)
+      return parseScene(ballsSceneJson(scene.name, scene.balls, scene.subdivisions),
+                        std::string(scene.name), ".");
+  return std::nullopt;
+}
+
+}  // namespace softbake
