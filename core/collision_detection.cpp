@@ -71,6 +71,37 @@ CollisionDetector::CollisionDetector(const CollisionSettings& settings)
     : broadPhase_(
           makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {}
 
+void CollisionDetector::sortUniqueCandidates(std::size_t particleCount) {
+  // A counting sort by particle (dense indices, a few candidates each), then each particle's
+  // handful of triangles by insertion sort: the order of sorting the (particle, triangle) pairs,
+  // in linear time. A comparison sort of them was a quarter of a contact-heavy step.
+  particleBucketEnd_.assign(particleCount + 1, 0);
+  for (const ParticleCandidate& c : unsortedCandidates_) ++particleBucketEnd_[c.particle + 1];
+  for (std::size_t p = 0; p < particleCount; ++p)
+    particleBucketEnd_[p + 1] += particleBucketEnd_[p];
+  particleCandidates_.resize(unsortedCandidates_.size());
+  for (const ParticleCandidate& c : unsortedCandidates_)
+    particleCandidates_[particleBucketEnd_[c.particle]++] = c;
+  // Each bucket p now ends at particleBucketEnd_[p] and starts where bucket p − 1 ends.
+  std::size_t kept = 0, begin = 0;
+  for (std::size_t p = 0; p < particleCount; ++p) {
+    const std::size_t end = particleBucketEnd_[p];
+    const std::size_t first = kept;
+    for (std::size_t i = begin; i < end; ++i) {
+      // Compacting in place: kept <= i, so nothing unread is overwritten.
+      const ParticleCandidate c = particleCandidates_[i];
+      std::size_t j = kept;
+      while (j > first && particleCandidates_[j - 1].triangle > c.triangle) --j;
+      if (j > first && particleCandidates_[j - 1].triangle == c.triangle) continue;  // duplicate
+      for (std::size_t k = kept; k > j; --k) particleCandidates_[k] = particleCandidates_[k - 1];
+      particleCandidates_[j] = c;
+      ++kept;
+    }
+    begin = end;
+  }
+  particleCandidates_.resize(kept);
+}
+
 void CollisionDetector::detect(const World& world, StageClock* clock) {
   const CollisionGeometry& geometry = world.collision;
   broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
@@ -98,21 +129,19 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
   // Particle contacts: every free particle of one triangle of a pair against the other triangle.
   // A particle belongs to several triangles, so the same (particle, triangle) comes from several
   // pairs: sorted and made unique before testing.
-  particleCandidates_.clear();
+  unsortedCandidates_.clear();
   auto addCorners = [&](Index from, Index against) {
     if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
     const Triangle& target = geometry.triangleVertices[against];
     for (Index p : geometry.triangleVertices[from])
       if (world.inverseMass[p] != 0 && !hasVertex(target, p))
-        particleCandidates_.push_back({p, against});
+        unsortedCandidates_.push_back({p, against});
   };
   for (const TrianglePair& pair : pairs_) {
     addCorners(pair.first, pair.second);
     addCorners(pair.second, pair.first);
   }
-  std::sort(particleCandidates_.begin(), particleCandidates_.end());
-  particleCandidates_.erase(std::unique(particleCandidates_.begin(), particleCandidates_.end()),
-                            particleCandidates_.end());
+  sortUniqueCandidates(world.particleCount());
 
   particleHit_.resize(particleCandidates_.size());
   particleSlots_.resize(particleCandidates_.size());

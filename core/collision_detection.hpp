@@ -60,10 +60,15 @@ class CollisionDetector {
     friend auto operator<=>(const ParticleCandidate&, const ParticleCandidate&) = default;
   };
 
+  /// unsortedCandidates_, sorted by (particle, triangle) and made unique, into particleCandidates_.
+  void sortUniqueCandidates(std::size_t particleCount);
+
   std::unique_ptr<BroadPhase> broadPhase_;
   std::vector<TrianglePair> pairs_;
   std::vector<TrianglePairHits> pairHits_;
   std::vector<ParticleCandidate> particleCandidates_;
+  std::vector<ParticleCandidate> unsortedCandidates_;  ///< as the pairs give them
+  std::vector<Index> particleBucketEnd_;               ///< counting sort by particle
   std::vector<std::uint8_t> particleHit_;
   std::vector<ParticleContact> particleSlots_;
   std::vector<EdgeContact> edgeContacts_;
