@@ -27,7 +27,9 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double milliseconds(std::int64_t nanoseconds) { return double(nanoseconds) * 1e-6; }
+double milliseconds(std::int64_t nanoseconds) {
+  return double(nanoseconds) * 1e-6;
+}
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -91,8 +93,8 @@ int bench(const BenchOptions& options) {
   for (const std::string& name : options.broadPhases) {
     BroadPhaseKind kind{};
     if (!parseBroadPhase(name, kind))
-      throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '", name,
-                      "'"));
+      throw Error(
+          cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '", name, "'"));
     kinds.push_back(kind);
   }
   if (kinds.empty()) kinds.push_back(loaded.setup.settings.collisions.broadPhase);
@@ -111,6 +113,7 @@ int bench(const BenchOptions& options) {
     if (options.substeps)
       settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
     settings.collisions.broadPhase = kind;
+    if (options.levels) settings.collisions.subdivisionLevels = *options.levels;
     const std::string broadPhase(broadPhaseName(kind));
 
     Simulator simulator(buildWorld(scene.setup));
@@ -123,9 +126,10 @@ int bench(const BenchOptions& options) {
     const std::size_t steps = std::size_t(requested);
     std::printf(
         "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
-        "%s broad phase, %d threads\n",
+        "%s broad phase, %d threads%s\n",
         scene.setup.name.c_str(), faces, world.bodies.size(), world.particleCount(), steps,
-        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(), threads);
+        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(), threads,
+        options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "");
     std::fflush(stdout);
 
     std::vector<ExportTiming> exports;
@@ -135,10 +139,11 @@ int bench(const BenchOptions& options) {
       VdbOptions vdb;
       vdb.fps = settings.fps;
       exports.push_back({std::make_unique<VdbSequenceWriter>(world, exportFolder, name, vdb)});
-      exports.push_back({std::make_unique<PngSequenceRenderer>(world, exportFolder, name,
-                                                               RenderOptions{})});
+      exports.push_back(
+          {std::make_unique<PngSequenceRenderer>(world, exportFolder, name, RenderOptions{})});
     }
     Frame frame;
+    for (long s = 0; s < options.warmupSteps; ++s) simulator.step(1);
 
     // Everything per step is stored first and summarised after, so the loop only records.
     std::vector<StageTimes> times(steps);
@@ -184,8 +189,7 @@ int bench(const BenchOptions& options) {
       std::printf("  %-13s %10.4f %10.4f %6.1f%%\n", stageName(Stage(stage)), stageSpread.median,
                   stageSpread.p95, allStages > 0 ? 100.0 * double(sum) / double(allStages) : 0.0);
     }
-    for (std::size_t s = 0; s < steps; ++s)
-      values[s] = milliseconds(times[s].total());
+    for (std::size_t s = 0; s < steps; ++s) values[s] = milliseconds(times[s].total());
     const Spread step = spread(values);
     std::printf("  %-13s %10.4f %10.4f\n", "step", step.median, step.p95);
 
@@ -201,8 +205,8 @@ int bench(const BenchOptions& options) {
                 contactsPerStep, contactMax, pairSum / double(steps));
     for (const ExportTiming& e : exports) {
       const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
-      std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(),
-                  perFrame * 1e3, e.frames);
+      std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
+                  e.frames);
       if (std::string(e.sink->name()) == "obj" && e.seconds > 0)
         std::printf(", %.0f MB/s", double(e.sink->bytesWritten()) / e.seconds / 1e6);
       std::printf("\n");
@@ -211,11 +215,12 @@ int bench(const BenchOptions& options) {
     const double stepsPerSecond = double(steps) / simulationSeconds;
     const double peak = peakResidentMiB();
     std::printf(
-        "scene=%s faces=%zu broadphase=%s threads=%d steps=%zu steps_per_s=%.1f "
+        "scene=%s faces=%zu broadphase=%s threads=%d warmup=%ld steps=%zu steps_per_s=%.1f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f\n",
-        scene.setup.name.c_str(), faces, broadPhase.c_str(), threads, steps, stepsPerSecond,
-        step.median, step.p95, contactsPerStep, peak, peak * 1048576.0 / double(faces));
+        scene.setup.name.c_str(), faces, broadPhase.c_str(), threads, options.warmupSteps, steps,
+        stepsPerSecond, step.median, step.p95, contactsPerStep, peak,
+        peak * 1048576.0 / double(faces));
     std::fflush(stdout);
 
     if (options.csv)
@@ -224,8 +229,7 @@ int bench(const BenchOptions& options) {
         csv += cat(broadPhase, ",", s + 1, ",", 2 + s / std::size_t(substeps));
         for (int stage = 0; stage < kStageCount; ++stage)
           csv += cat(",", milliseconds(t.nanoseconds[stage]));
-        csv += cat(",", milliseconds(t.total()), ",", pairs[s], ",",
-                   contacts[s], "\n");
+        csv += cat(",", milliseconds(t.total()), ",", pairs[s], ",", contacts[s], "\n");
       }
   }
   if (options.csv) {

@@ -19,15 +19,17 @@
 namespace softbake {
 
 struct BenchOptions {
-  std::string input;                      ///< scene .json, mesh file or built-in scene name
-  std::optional<int> frames;              ///< frames of the scene to simulate (overrides it)
-  std::optional<long> steps;              ///< exact substep count instead of whole frames
-  std::optional<std::string> substeps;    ///< "auto" or a count per frame
-  std::vector<std::string> broadPhases;   ///< empty: the scene's
-  int threads = 0;                        ///< 0: all cores
+  std::string input;                     ///< scene .json, mesh file or built-in scene name
+  std::optional<int> frames;             ///< frames of the scene to simulate (overrides it)
+  std::optional<long> steps;             ///< exact substep count instead of whole frames
+  std::optional<std::string> substeps;   ///< "auto" or a count per frame
+  std::vector<std::string> broadPhases;  ///< empty: the scene's
+  std::optional<int> levels;             ///< sbhash subdivision level (overrides the scene)
+  long warmupSteps = 0;                  ///< steps simulated before measuring, not reported
+  int threads = 0;                       ///< 0: all cores
   std::optional<std::filesystem::path> csv;
   bool withExports = false;
-  std::filesystem::path out;              ///< where exports go; empty: a temporary folder
+  std::filesystem::path out;  ///< where exports go; empty: a temporary folder
 };
 
 /// Returns the process exit code. Errors are printed, never thrown.

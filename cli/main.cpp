@@ -135,6 +135,12 @@ int main(int argc, char** argv) {
                    "(comma-separated; default: the scene's)")
       ->delimiter(',')
       ->check(CLI::IsMember({"sbhash", "spatialhash", "bvh", "brute"}));
+  benchApp->add_option("--levels", bench.levels, "subdivision level of the sbhash boxes")
+      ->check(CLI::Range(0, 8));
+  benchApp
+      ->add_option("--warmup", bench.warmupSteps,
+                   "simulate this many steps first, unmeasured (to reach the contacts)")
+      ->check(CLI::Range(0L, 1000000000L));
   benchApp->add_option("-j,--threads", bench.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   benchApp->add_option("--csv", bench.csv, "write one row per step and broad phase to this file");

@@ -333,7 +333,20 @@ void BoxHashBroadPhase::trianglePairs(const BroadPhaseInput& input,
   }
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<TrianglePair>& out = buffers_[chunk];
-    std::vector<Index>&nearA = nearA_[chunk], &nearB = nearB_[chunk];
+    std::vector<SweepEntry>&nearA = nearA_[chunk], &nearB = nearB_[chunk];
+    const auto byLow = [](const SweepEntry& p, const SweepEntry& q) {
+      return p.lo < q.lo || (p.lo == q.lo && p.triangle < q.triangle);
+    };
+    const auto gather = [&](const SurfaceLeaves& surface, const Leaf& leaf, const Box3* near,
+                            std::vector<SweepEntry>& entries) {
+      entries.clear();
+      for (Index i = leaf.begin; i < leaf.end; ++i) {
+        const Index t = surface.triangles[i];
+        const Box3& box = input.triangleBox[t];
+        if (!near || box.intersects(*near)) entries.push_back({box.min().x(), box.max().x(), t});
+      }
+      std::sort(entries.begin(), entries.end(), byLow);
+    };
     const std::size_t stop = std::min(leafPairs_.size(), (chunk + 1) * perChunk);
     for (std::size_t k = chunk * perChunk; k < stop; ++k) {
       const auto [a, b] = leafPairs_[k];
@@ -348,22 +361,30 @@ void BoxHashBroadPhase::trianglePairs(const BroadPhaseInput& input,
         if (!pairEligible(input, i, j)) return;
         out.push_back(i < j ? TrianglePair{i, j} : TrianglePair{j, i});
       };
+      // Sort and sweep on x: only boxes whose x-intervals overlap are compared, so a coarse leaf
+      // of many triangles costs about its size, not its size squared.
       if (a == b) {
-        for (Index i = la.begin; i < la.end; ++i)
-          for (Index j = i + 1; j < la.end; ++j) consider(sa.triangles[i], sa.triangles[j]);
+        gather(sa, la, nullptr, nearA);
+        for (std::size_t i = 0; i < nearA.size(); ++i)
+          for (std::size_t j = i + 1; j < nearA.size() && nearA[j].lo <= nearA[i].hi; ++j)
+            consider(nearA[i].triangle, nearA[j].triangle);
         continue;
       }
-      nearA.clear();
-      nearB.clear();
-      for (Index i = la.begin; i < la.end; ++i)
-        if (input.triangleBox[sa.triangles[i]].intersects(leafBox_[b]))
-          nearA.push_back(sa.triangles[i]);
+      gather(sa, la, &leafBox_[b], nearA);
       if (nearA.empty()) continue;
-      for (Index j = lb.begin; j < lb.end; ++j)
-        if (input.triangleBox[sb.triangles[j]].intersects(leafBox_[a]))
-          nearB.push_back(sb.triangles[j]);
-      for (Index i : nearA)
-        for (Index j : nearB) consider(i, j);
+      gather(sb, lb, &leafBox_[a], nearB);
+      std::size_t ia = 0, ib = 0;
+      while (ia < nearA.size() && ib < nearB.size()) {
+        if (nearA[ia].lo <= nearB[ib].lo) {
+          for (std::size_t j = ib; j < nearB.size() && nearB[j].lo <= nearA[ia].hi; ++j)
+            consider(nearA[ia].triangle, nearB[j].triangle);
+          ++ia;
+        } else {
+          for (std::size_t i = ia; i < nearA.size() && nearA[i].lo <= nearB[ib].hi; ++i)
+            consider(nearA[i].triangle, nearB[ib].triangle);
+          ++ib;
+        }
+      }
     }
   });
   buffers_.mergeInto(pairs);

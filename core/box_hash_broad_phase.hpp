@@ -149,7 +149,13 @@ class BoxHashBroadPhase final : public BroadPhase {
   std::vector<Index> bucketLeaves_;         ///< leaf ids, grouped by bucket
 
   std::vector<std::array<Index, 2>> leafPairs_;
-  std::vector<std::vector<Index>> nearA_, nearB_;  ///< per chunk: triangles near the other leaf
+  /// A triangle's box on the sweep axis (x), for the sort-and-sweep inside a leaf pair.
+  struct SweepEntry {
+    Scalar lo, hi;
+    Index triangle;
+  };
+  /// Per chunk: the triangles of each leaf near the other leaf, sorted by `lo`.
+  std::vector<std::vector<SweepEntry>> nearA_, nearB_;
   broad_phase_detail::PairBuffers buffers_;
   BoxHashGrid grid_;
   BoxHashStats stats_;

@@ -11,6 +11,8 @@ namespace softbake {
 
 namespace {
 constexpr std::size_t kPairGrain = 256;
+/// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
+constexpr std::size_t kParticleChunks = 128;
 
 TriangleCorners corners(const World& world, Index triangle) {
   const Triangle& t = world.collision.triangleVertices[triangle];
@@ -71,37 +73,6 @@ CollisionDetector::CollisionDetector(const CollisionSettings& settings)
     : broadPhase_(
           makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {}
 
-void CollisionDetector::sortUniqueCandidates(std::size_t particleCount) {
-  // A counting sort by particle (dense indices, a few candidates each), then each particle's
-  // handful of triangles by insertion sort: the order of sorting the (particle, triangle) pairs,
-  // in linear time. A comparison sort of them was a quarter of a contact-heavy step.
-  particleBucketEnd_.assign(particleCount + 1, 0);
-  for (const ParticleCandidate& c : unsortedCandidates_) ++particleBucketEnd_[c.particle + 1];
-  for (std::size_t p = 0; p < particleCount; ++p)
-    particleBucketEnd_[p + 1] += particleBucketEnd_[p];
-  particleCandidates_.resize(unsortedCandidates_.size());
-  for (const ParticleCandidate& c : unsortedCandidates_)
-    particleCandidates_[particleBucketEnd_[c.particle]++] = c;
-  // Each bucket p now ends at particleBucketEnd_[p] and starts where bucket p − 1 ends.
-  std::size_t kept = 0, begin = 0;
-  for (std::size_t p = 0; p < particleCount; ++p) {
-    const std::size_t end = particleBucketEnd_[p];
-    const std::size_t first = kept;
-    for (std::size_t i = begin; i < end; ++i) {
-      // Compacting in place: kept <= i, so nothing unread is overwritten.
-      const ParticleCandidate c = particleCandidates_[i];
-      std::size_t j = kept;
-      while (j > first && particleCandidates_[j - 1].triangle > c.triangle) --j;
-      if (j > first && particleCandidates_[j - 1].triangle == c.triangle) continue;  // duplicate
-      for (std::size_t k = kept; k > j; --k) particleCandidates_[k] = particleCandidates_[k - 1];
-      particleCandidates_[j] = c;
-      ++kept;
-    }
-    begin = end;
-  }
-  particleCandidates_.resize(kept);
-}
-
 void CollisionDetector::detect(const World& world, StageClock* clock) {
   const CollisionGeometry& geometry = world.collision;
   broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
@@ -128,34 +99,46 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
 
   // Particle contacts: every free particle of one triangle of a pair against the other triangle.
   // A particle belongs to several triangles, so the same (particle, triangle) comes from several
-  // pairs: sorted and made unique before testing.
-  unsortedCandidates_.clear();
-  auto addCorners = [&](Index from, Index against) {
-    if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
-    const Triangle& target = geometry.triangleVertices[against];
-    for (Index p : geometry.triangleVertices[from])
-      if (world.inverseMass[p] != 0 && !hasVertex(target, p))
-        unsortedCandidates_.push_back({p, against});
-  };
-  for (const TrianglePair& pair : pairs_) {
-    addCorners(pair.first, pair.second);
-    addCorners(pair.second, pair.first);
-  }
-  sortUniqueCandidates(world.particleCount());
-
-  particleHit_.resize(particleCandidates_.size());
-  particleSlots_.resize(particleCandidates_.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleCandidates_.size(), kPairGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i)
-                        particleHit_[i] =
-                            testParticle(world, particleCandidates_[i].particle,
-                                         particleCandidates_[i].triangle, particleSlots_[i]);
-                    });
+  // pairs. Testing the repeats is cheaper than removing them first (that was a serial sort of
+  // every candidate, a quarter of a contact-heavy step): the pairs are tested in parallel chunks,
+  // and only the few hits are sorted by (particle, triangle) and made unique. A test depends on
+  // nothing but its (particle, triangle), so repeats agree and the result is the same for any
+  // chunking or thread count.
+  const std::size_t chunks = std::min(kParticleChunks, pairs_.size());
+  const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
+  if (chunkHits_.size() < chunks) chunkHits_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<ParticleContact>& hits = chunkHits_[chunk];
+    hits.clear();
+    ParticleContact contact;
+    auto testCorners = [&](Index from, Index against) {
+      if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
+      const Triangle& target = geometry.triangleVertices[against];
+      for (Index p : geometry.triangleVertices[from])
+        if (world.inverseMass[p] != 0 && !hasVertex(target, p) &&
+            testParticle(world, p, against, contact))
+          hits.push_back(contact);
+    };
+    const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
+    for (std::size_t i = chunk * perChunk; i < stop; ++i) {
+      testCorners(pairs_[i].first, pairs_[i].second);
+      testCorners(pairs_[i].second, pairs_[i].first);
+    }
+  });
   particleContacts_.clear();
-  for (std::size_t i = 0; i < particleCandidates_.size(); ++i)
-    if (particleHit_[i]) particleContacts_.push_back(particleSlots_[i]);
-  // Candidates were sorted by particle, so each particle's contacts are adjacent; within one
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+    particleContacts_.insert(particleContacts_.end(), chunkHits_[chunk].begin(),
+                             chunkHits_[chunk].end());
+  const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
+    return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
+  };
+  std::sort(particleContacts_.begin(), particleContacts_.end(), byParticleTriangle);
+  particleContacts_.erase(std::unique(particleContacts_.begin(), particleContacts_.end(),
+                                      [](const ParticleContact& a, const ParticleContact& b) {
+                                        return a.particle == b.particle && a.triangle == b.triangle;
+                                      }),
+                          particleContacts_.end());
+  // Hits are sorted by particle, so each particle's contacts are adjacent; within one
   // particle, the earliest crossing comes first, ties kept in triangle order. The groups are a
   // handful of contacts: an insertion sort, which is stable and, unlike std::stable_sort,
   // allocates nothing.

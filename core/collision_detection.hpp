@@ -10,10 +10,10 @@
 #include <memory>
 #include <vector>
 
-#include "core/stage_timer.hpp"
 #include "core/broad_phase.hpp"
 #include "core/line_triangle.hpp"
 #include "core/scene_setup.hpp"
+#include "core/stage_timer.hpp"
 #include "core/triangle_pair_test.hpp"
 
 namespace softbake {
@@ -55,22 +55,10 @@ class CollisionDetector {
   BroadPhaseKind broadPhase() const { return broadPhase_->kind(); }
 
  private:
-  struct ParticleCandidate {
-    Index particle, triangle;
-    friend auto operator<=>(const ParticleCandidate&, const ParticleCandidate&) = default;
-  };
-
-  /// unsortedCandidates_, sorted by (particle, triangle) and made unique, into particleCandidates_.
-  void sortUniqueCandidates(std::size_t particleCount);
-
   std::unique_ptr<BroadPhase> broadPhase_;
   std::vector<TrianglePair> pairs_;
   std::vector<TrianglePairHits> pairHits_;
-  std::vector<ParticleCandidate> particleCandidates_;
-  std::vector<ParticleCandidate> unsortedCandidates_;  ///< as the pairs give them
-  std::vector<Index> particleBucketEnd_;               ///< counting sort by particle
-  std::vector<std::uint8_t> particleHit_;
-  std::vector<ParticleContact> particleSlots_;
+  std::vector<std::vector<ParticleContact>> chunkHits_;  ///< particle hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;
   std::vector<ParticleContact> particleContacts_;
 };

@@ -4,13 +4,20 @@ namespace softbake {
 
 const char* stageName(Stage stage) {
   switch (stage) {
-    case Stage::Forces: return "forces";
-    case Stage::Integration: return "integration";
-    case Stage::Boxes: return "boxes";
-    case Stage::BroadPhase: return "broad_phase";
-    case Stage::NarrowPhase: return "narrow_phase";
-    case Stage::Response: return "response";
-    case Stage::Planes: return "planes";
+    case Stage::Forces:
+      return "forces";
+    case Stage::Integration:
+      return "integration";
+    case Stage::Boxes:
+      return "boxes";
+    case Stage::BroadPhase:
+      return "broad_phase";
+    case Stage::NarrowPhase:
+      return "narrow_phase";
+    case Stage::Response:
+      return "response";
+    case Stage::Planes:
+      return "planes";
   }
   return "unknown";
 }

@@ -30,20 +30,20 @@ nlohmann::json ballsSceneJson(std::string_view name, int balls, int subdivisions
   for (int i = 0; i < balls; ++i) {
     const int layer = i / perLayer, slot = i % perLayer;
     const int column = slot % columns, row = slot / columns;
-    // Centred grid, 1 m apart; the upper layer sits over the gaps of the lower one.
-    const double x = (column - (columns - 1) / 2.0) + 0.5 * layer;
-    const double z = (row - (columns - 1) / 2.0) + 0.5 * layer;
-    const double y = 0.6 + 1.1 * layer;
-    // Lower layer: each ball heads for its neighbour; upper layer: falls with a slight drift.
-    const double vx = layer == 0 ? (column % 2 == 0 ? 0.5 : -0.5) : 0.1;
-    const double vz = layer == 0 ? (row % 2 == 0 ? 0.3 : -0.3) : -0.1;
-    bodies.push_back({{"name", "ball" + std::to_string(i)},
-                      {"mesh", {{"primitive", "icosphere"},
-                                {"subdivisions", subdivisions},
-                                {"radius", 0.4}}},
-                      {"transform", {{"translate", {x, y, z}}}},
-                      {"material", kMaterials[i % 4]},
-                      {"velocity", {vx, 0.0, vz}}});
+    // Centred grid, 0.82 m apart (2 cm gaps); the upper layer rests in the hollows of the lower
+    // one, 5 cm off. Every ball moves towards a neighbour, so contacts start within ~150 steps.
+    const double x = (column - (columns - 1) / 2.0) * 0.82 + 0.41 * layer;
+    const double z = (row - (columns - 1) / 2.0) * 0.82 + 0.41 * layer;
+    const double y = 0.45 + 0.62 * layer;
+    const double vx = layer == 0 ? (column % 2 == 0 ? 0.5 : -0.5) : 0.0;
+    const double vz = layer == 0 ? (row % 2 == 0 ? 0.5 : -0.5) : 0.0;
+    const double vy = layer == 0 ? 0.0 : -1.0;
+    bodies.push_back(
+        {{"name", "ball" + std::to_string(i)},
+         {"mesh", {{"primitive", "icosphere"}, {"subdivisions", subdivisions}, {"radius", 0.4}}},
+         {"transform", {{"translate", {x, y, z}}}},
+         {"material", kMaterials[i % 4]},
+         {"velocity", {vx, vy, vz}}});
   }
   return {{"name", std::string(name)},
           {"settings", {{"fps", 24}, {"frames", 48}, {"substeps", "auto"}}},
