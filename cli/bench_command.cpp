@@ -3,7 +3,6 @@
 #include <stdlib.h>
 #include <sys/resource.h>
 #include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -86,7 +85,9 @@ int bench(const BenchOptions& options) {
   std::optional<tbb::global_control> threadLimit;
   if (options.threads > 0)
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
-  const int threads = tbb::this_task_arena::max_concurrency();
+  // What TBB will use: the limit just set, or all cores.
+  const int threads =
+      int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
   const SceneFile loaded = loadSceneInput(options.input);
   std::vector<BroadPhaseKind> kinds;
