@@ -30,11 +30,13 @@ nlohmann::json ballsSceneJson(std::string_view name, int balls, int subdivisions
   for (int i = 0; i < balls; ++i) {
     const int layer = i / perLayer, slot = i % perLayer;
     const int column = slot % columns, row = slot / columns;
-    // Centred grid, 0.82 m apart (2 cm gaps); the upper layer rests in the hollows of the lower
-    // one, 5 cm off. Every ball moves towards a neighbour, so contacts start within ~150 steps.
-    const double x = (column - (columns - 1) / 2.0) * 0.82 + 0.41 * layer;
-    const double z = (row - (columns - 1) / 2.0) * 0.82 + 0.41 * layer;
-    const double y = 0.45 + 0.62 * layer;
+    // Centred grid, 0.802 m apart (2 mm gaps); the upper layer sits in the hollows of the lower
+    // one, 2 mm off too. Every ball moves towards a neighbour, so contacts start within a few
+    // dozen steps at any resolution, and the scenes measure contact, not free fall.
+    constexpr double kSpacing = 0.802, kHalf = kSpacing / 2;
+    const double x = (column - (columns - 1) / 2.0) * kSpacing + kHalf * layer;
+    const double z = (row - (columns - 1) / 2.0) * kSpacing + kHalf * layer;
+    const double y = 0.45 + std::sqrt(kSpacing * kSpacing - 2 * kHalf * kHalf) * layer;
     const double vx = layer == 0 ? (column % 2 == 0 ? 0.5 : -0.5) : 0.0;
     const double vz = layer == 0 ? (row % 2 == 0 ? 0.5 : -0.5) : 0.0;
     const double vy = layer == 0 ? 0.0 : -1.0;

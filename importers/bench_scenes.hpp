@@ -7,8 +7,8 @@
 ///   balls100k   20 balls of 5,120 faces              (102,400 faces)
 ///   balls1m     48 balls of 20,480 faces             (983,040 faces)
 ///
-/// The balls* scenes are one family for the scaling runs: 0.4 m balls in two staggered layers 2–5
-/// cm apart, the lower layer moving towards each other and the upper one falling into it, over a
+/// The balls* scenes are one family for the scaling runs: 0.4 m balls in two staggered layers 2 mm
+/// apart, the lower layer moving towards each other and the upper one falling into it, over a
 /// ground plane, with the figure 7 scene's mix of rubber, jelly, balloon and stiff materials.
 /// More faces means more and finer balls, so collisions per face stay about the same.
 

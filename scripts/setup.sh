@@ -14,6 +14,7 @@ packages=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libstb-dev  # render: EGL on Mesa's llvmpipe
   libcli11-dev                         # cli
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+  libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
 )
 missing=()
 for package in "${packages[@]}"; do
