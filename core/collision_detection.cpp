@@ -29,23 +29,52 @@ bool hasVertex(const Triangle& t, Index v) {
   return t[0] == v || t[1] == v || t[2] == v;
 }
 
-/// Tests particle p's motion against `triangle`. The triangle moved too during the substep: the
-/// particle's start is shifted by the triangle's own displacement (of its centroid), so the test
-/// sees the motion relative to the triangle. Without that, two bodies closing in on each other
-/// faster than the skin per substep would meet with each particle's start already behind the
-/// other's new surface, and the crossing would go unseen. Exact for a translating triangle; for a
-/// rotating or stretching one, edge contacts catch what is left.
-bool testParticle(const World& world, Index p, Index triangle, ParticleContact& contact) {
-  const CollisionGeometry& geometry = world.collision;
-  const Triangle& t = geometry.triangleVertices[triangle];
-  const TriangleCorners now = corners(world, triangle);
+/// The struck triangle of a particle test, computed once for all the particles tested against it.
+/// The triangle moved too during the substep: a particle's start is shifted by the triangle's own
+/// displacement (of its centroid), so the test sees the motion relative to the triangle. Without
+/// that, two bodies closing in on each other faster than the skin per substep would meet with each
+/// particle's start already behind the other's new surface, and the crossing would go unseen.
+/// Exact for a translating triangle; for a rotating or stretching one, edge contacts catch what is
+/// left.
+struct ParticleTarget {
+  Index triangle;
+  TriangleCorners now;
+  Vec3 shift;   ///< the centroid's displacement over the substep
+  Vec3 normal;  ///< unnormalised, as intersectSegmentTriangle computes it
+};
+
+ParticleTarget particleTarget(const World& world, Index triangle) {
+  const Triangle& t = world.collision.triangleVertices[triangle];
+  ParticleTarget target{triangle, corners(world, triangle), Vec3::Zero(), Vec3::Zero()};
   Vec3 displacement = Vec3::Zero();
-  for (int k = 0; k < 3; ++k) displacement += now[k] - previousCollisionVertex(world, t[k]);
-  const Vec3 start = world.previousPosition[p] + displacement / Scalar(3);
+  for (int k = 0; k < 3; ++k) displacement += target.now[k] - previousCollisionVertex(world, t[k]);
+  target.shift = displacement / Scalar(3);
+  target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
+  return target;
+}
+
+/// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
+/// it): intersectSegmentTriangle's own first rejection, computed the same way, so skipping the
+/// test then changes nothing. Most candidates end here.
+bool mayCross(const World& world, Index p, const ParticleTarget& target) {
+  const Vec3 start = world.previousPosition[p] + target.shift;
+  const Scalar startSide = target.normal.dot(start - target.now[0]);
+  const Scalar endSide = target.normal.dot(world.position[p] - target.now[0]);
+  return !((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
+         startSide != endSide;
+}
+
+/// Tests particle p's motion against the target triangle.
+bool testParticle(const World& world, Index p, const ParticleTarget& target,
+                  ParticleContact& contact) {
+  const CollisionGeometry& geometry = world.collision;
+  const Index triangle = target.triangle;
+  const TriangleCorners& now = target.now;
+  const Vec3 start = world.previousPosition[p] + target.shift;
   const Vec3& end = world.position[p];
   if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit)) return false;
 
-  const Vec3 normal = (now[1] - now[0]).cross(now[2] - now[0]);
+  const Vec3& normal = target.normal;
   const Scalar startSide = normal.dot(start - now[0]), endSide = normal.dot(end - now[0]);
   Scalar orientation;
   if (geometry.surfaceClosed[geometry.triangleSurface[triangle]]) {
@@ -127,10 +156,11 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
     ParticleContact contact;
     auto testCorners = [&](Index from, Index against) {
       if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
-      const Triangle& target = geometry.triangleVertices[against];
+      const Triangle& struck = geometry.triangleVertices[against];
+      const ParticleTarget target = particleTarget(world, against);
       for (Index p : geometry.triangleVertices[from])
-        if (world.inverseMass[p] != 0 && !hasVertex(target, p) && testsFrom(from, p, against) &&
-            testParticle(world, p, against, contact))
+        if (world.inverseMass[p] != 0 && !hasVertex(struck, p) && mayCross(world, p, target) &&
+            testsFrom(from, p, against) && testParticle(world, p, target, contact))
           hits.push_back(contact);
     };
     const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);

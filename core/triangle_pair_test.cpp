@@ -4,6 +4,16 @@ namespace softbake {
 
 int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const TriangleCorners& face,
                                std::array<EdgeHit, 2>& hits) {
+  // All three corners strictly on one side of the face's plane: no edge can cross it. The sides
+  // are computed exactly as intersectSegmentTriangle computes them, so this only skips tests that
+  // would fail; most broad-phase pairs are near misses and end here.
+  {
+    const Vec3 faceNormal = (face[1] - face[0]).cross(face[2] - face[0]);
+    const Scalar s0 = faceNormal.dot(edgeTriangle[0] - face[0]);
+    const Scalar s1 = faceNormal.dot(edgeTriangle[1] - face[0]);
+    const Scalar s2 = faceNormal.dot(edgeTriangle[2] - face[0]);
+    if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return 0;
+  }
   // A zero-area edge triangle lies on one line, and its longest edge covers the other two: testing
   // all three would report one crossing up to three times, at points a rounding error apart.
   int firstEdge = 0, passes = 3;
