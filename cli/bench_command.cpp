@@ -115,6 +115,7 @@ int bench(const BenchOptions& options) {
       settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
     settings.collisions.broadPhase = kind;
     if (options.levels) settings.collisions.subdivisionLevels = *options.levels;
+    if (options.noPairCache) settings.collisions.pairCache = false;
     const std::string broadPhase(broadPhaseName(kind));
 
     Simulator simulator(buildWorld(scene.setup));
@@ -127,9 +128,10 @@ int bench(const BenchOptions& options) {
     const std::size_t steps = std::size_t(requested);
     std::printf(
         "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
-        "%s broad phase, %d threads%s\n",
+        "%s broad phase%s, %d threads%s\n",
         scene.setup.name.c_str(), faces, world.bodies.size(), world.particleCount(), steps,
-        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(), threads,
+        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(),
+        settings.collisions.pairCache ? " with the pair cache" : " every step", threads,
         options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "");
     std::fflush(stdout);
 
@@ -216,10 +218,12 @@ int bench(const BenchOptions& options) {
     const double stepsPerSecond = double(steps) / simulationSeconds;
     const double peak = peakResidentMiB();
     std::printf(
-        "scene=%s faces=%zu broadphase=%s threads=%d warmup=%ld steps=%zu steps_per_s=%.1f "
+        "scene=%s faces=%zu broadphase=%s pair_cache=%d threads=%d warmup=%ld steps=%zu "
+        "steps_per_s=%.1f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f\n",
-        scene.setup.name.c_str(), faces, broadPhase.c_str(), threads, options.warmupSteps, steps,
+        scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
+        threads, options.warmupSteps, steps,
         stepsPerSecond, step.median, step.p95, contactsPerStep, peak,
         peak * 1048576.0 / double(faces));
     std::fflush(stdout);

@@ -26,6 +26,7 @@ struct BenchOptions {
   std::vector<std::string> broadPhases;  ///< empty: the scene's
   std::optional<int> levels;             ///< sbhash subdivision level (overrides the scene)
   long warmupSteps = 0;                  ///< steps simulated before measuring, not reported
+  bool noPairCache = false;              ///< run the broad phase every step (to compare them)
   int threads = 0;                       ///< 0: all cores
   std::optional<std::filesystem::path> csv;
   bool withExports = false;

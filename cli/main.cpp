@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
                    "collision response: two-sided (momentum-conserving), paper (only the "
                    "particle moves) or none")
       ->check(CLI::IsMember({"two-sided", "paper", "none"}));
+  runApp->add_flag("--no-pair-cache", run.noPairCache,
+                   "run the broad phase every substep instead of reusing its pairs (same result)");
   runApp->add_flag("--no-response", run.noResponse,
                    "detect contacts but do not respond (the paper's figure 5b)");
   runApp->add_flag("--contacts", run.contacts,
@@ -141,6 +143,8 @@ int main(int argc, char** argv) {
       ->add_option("--warmup", bench.warmupSteps,
                    "simulate this many steps first, unmeasured (to reach the contacts)")
       ->check(CLI::Range(0L, 1000000000L));
+  benchApp->add_flag("--no-pair-cache", bench.noPairCache,
+                     "run the broad phase every step, to compare the broad phases themselves");
   benchApp->add_option("-j,--threads", bench.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   benchApp->add_option("--csv", bench.csv, "write one row per step and broad phase to this file");

@@ -44,6 +44,7 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
         cat("--response: expected two-sided, paper or none, got '", *options.response, "'"));
   if (options.noResponse) collisions.response = ResponseMode::None;
   if (options.levels) collisions.subdivisionLevels = *options.levels;
+  if (options.noPairCache) collisions.pairCache = false;
   if (options.contacts) scene.output.contacts = true;
   if (options.render) scene.output.png = *options.render;
   if (options.vdb) scene.output.vdb = true;

@@ -19,6 +19,7 @@ struct RunOptions {
   std::optional<std::string> response;    ///< "two-sided", "paper", "none"
   std::optional<int> levels;              ///< sbhash subdivision level
   bool noResponse = false;                ///< detection only: --response none
+  bool noPairCache = false;               ///< run the broad phase every substep
   bool contacts = false;                  ///< write OUT/contacts/<scene>_0001.json …
   std::optional<bool> render;             ///< --render / --no-render; unset: the scene's choice
   std::optional<std::string> size;        ///< "1280x720"

@@ -100,11 +100,16 @@ const Vec3& collisionVertex(const World& world, Index v) {
 
 CollisionDetector::CollisionDetector(const CollisionSettings& settings)
     : broadPhase_(
-          makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {}
+          makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {
+  if (settings.pairCache) pairCache_.emplace();
+}
 
 void CollisionDetector::detect(const World& world, StageClock* clock) {
   const CollisionGeometry& geometry = world.collision;
-  broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
+  if (pairCache_)
+    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(), pairs_);
+  else
+    broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
 
   // Edge contacts: the multi-pass test on every candidate pair, one slot per pair.

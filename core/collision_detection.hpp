@@ -8,9 +8,11 @@
 /// phase. Buffers keep their capacity: a warmed-up substep allocates nothing.
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/broad_phase.hpp"
+#include "core/pair_cache.hpp"
 #include "core/line_triangle.hpp"
 #include "core/scene_setup.hpp"
 #include "core/stage_timer.hpp"
@@ -56,6 +58,7 @@ class CollisionDetector {
 
  private:
   std::unique_ptr<BroadPhase> broadPhase_;
+  std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;
   std::vector<TrianglePairHits> pairHits_;
   std::vector<std::vector<ParticleContact>> chunkHits_;  ///< particle hits, per chunk of pairs

@@ -68,11 +68,17 @@ std::string_view responseModeName(ResponseMode mode);
 bool parseResponseMode(std::string_view name, ResponseMode& mode);
 
 struct CollisionSettings {
-  BroadPhaseKind broadPhase = BroadPhaseKind::BoxHash;
+  /// The fastest correct broad phase, measured (bench/results/README.md): the AABB tree. The
+  /// paper's subdivided boxes and box hash remain one key away ("sbhash"), with identical results.
+  BroadPhaseKind broadPhase = BroadPhaseKind::Bvh;
   int subdivisionLevels = 3;  ///< level L of the subdivided boxes (sbhash): 2^L leaves per axis
   ResponseMode response = ResponseMode::TwoSided;
   Scalar restitution = 0.2f;  ///< between soft bodies; static colliders carry their own
   Scalar friction = 0.3f;
+  /// Reuse the broad phase's pairs while every triangle stays within a margin of where it was
+  /// (core/pair_cache.hpp): identical results, the broad phase once every few dozen steps. Off
+  /// runs the broad phase every step, to compare broad phases themselves.
+  bool pairCache = true;
 };
 
 struct SimulationSettings {

@@ -108,7 +108,7 @@ class SceneParser {
 
   void parseCollisions(const JsonValue& value) {
     const JsonObject object =
-        value.object({"broadphase", "levels", "response", "restitution", "friction"});
+        value.object({"broadphase", "levels", "response", "restitution", "friction", "pair_cache"});
     CollisionSettings& collisions = scene_.setup.settings.collisions;
     if (auto broadPhase = object.find("broadphase")) {
       if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
@@ -124,6 +124,7 @@ class SceneParser {
       collisions.restitution = Scalar(restitution->numberIn(0, 1));
     if (auto friction = object.find("friction"))
       collisions.friction = Scalar(friction->numberAtLeast(0));
+    if (auto pairCache = object.find("pair_cache")) collisions.pairCache = pairCache->boolean();
   }
 
   // The meshes a `mesh` key names, in their own space. A file may hold several.

@@ -3,6 +3,7 @@
 // exactly what the definition in core/broad_phase.hpp says.
 
 #include "core/broad_phase.hpp"
+#include "core/pair_cache.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -320,6 +321,33 @@ TEST(BroadPhase, EveryKindStaysExactWhileBodiesDeformStepAfterStep) {
       p.x() += Scalar(0.05);
     });
     soup.jitterMoving(rng, Scalar(0.02), Scalar(0.01));
+  }
+}
+
+TEST(PairCache, GivesTheBroadPhasesExactPairsWhileBodiesCreepAndJump) {
+  // Small moves stay inside the grown boxes and reuse the cached pairs; a jump forces a rebuild.
+  // Either way the pairs must equal brute force on the current boxes, in the same order.
+  std::mt19937 rng(9);
+  Soup soup = icosphereScene(rng, 1, 3, 3, true);
+  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+                              BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
+    Soup scene = soup;
+    std::unique_ptr<BroadPhase> broadPhase = makeBroadPhase(kind);
+    PairCache cache;
+    std::vector<TrianglePair> pairs;
+    constexpr int kSteps = 40;
+    for (int step = 0; step < kSteps; ++step) {
+      cache.findPairs(*broadPhase, scene.input(), pairs);
+      const std::vector<TrianglePair> expected = brutePairs(scene.input());
+      ASSERT_EQ(pairs, expected) << broadPhaseName(kind) << ", step " << step << ": "
+                                 << firstDifference(expected, pairs);
+      const Scalar move = step % 10 == 9 ? Scalar(0.2) : Scalar(0.0005);
+      scene.moveMovingVertices([&](Vec3& p) { p.x() += move; });
+      scene.jitterMoving(rng, Scalar(0.0005), Scalar(0.01));
+    }
+    // The first call and the three jumps seen before the last call rebuild; creeping reuses.
+    EXPECT_GE(cache.rebuilds(), 4u) << broadPhaseName(kind);
+    EXPECT_LE(cache.rebuilds(), std::size_t(kSteps / 4)) << broadPhaseName(kind);
   }
 }
 
