@@ -9,9 +9,10 @@
 /// damping; its integration is its own; its collision response is its own. So the two do not
 /// produce the same motion, only the same amount of work to do per step.
 ///
-///   build/bench/bullet_peer_bench SCENE [--steps N] [--warmup N] [--threads T]
+///   build/bench/bullet_peer_bench SCENE [--steps N] [--warmup N] [--csv FILE]
 ///
-/// SCENE as for `softbake bench` (a file or a built-in name). Prints one machine-readable line:
+/// SCENE as for `softbake bench` (a file or a built-in name). Bullet's soft bodies run on one
+/// thread. Prints one machine-readable line, and with --csv writes it as a CSV row too:
 ///   peer=bullet scene=balls10k faces=10240 steps=500 steps_per_s=...
 
 #include <BulletSoftBody/btDefaultSoftBodySolver.h>
@@ -32,6 +33,8 @@
 #include "cli/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
+#include "core/text.hpp"
+#include "exporters/atomic_file.hpp"
 
 namespace softbake {
 namespace {
@@ -39,27 +42,31 @@ namespace {
 struct Arguments {
   std::string scene;
   long steps = 500, warmup = 0;
+  std::string csv;
 };
 
 Arguments parse(int argc, char** argv) {
   Arguments arguments;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    const auto value = [&]() -> long {
+    const auto text = [&]() -> std::string {
       if (i + 1 >= argc) throw Error(flag + " needs a value");
-      return std::strtol(argv[++i], nullptr, 10);
+      return argv[++i];
     };
+    const auto value = [&]() -> long { return std::strtol(text().c_str(), nullptr, 10); };
     if (flag == "--steps")
       arguments.steps = value();
     else if (flag == "--warmup")
       arguments.warmup = value();
+    else if (flag == "--csv")
+      arguments.csv = text();
     else if (flag.rfind("--", 0) == 0)
       throw Error("unknown option " + flag);
     else
       arguments.scene = flag;
   }
   if (arguments.scene.empty())
-    throw Error("usage: bullet_peer_bench SCENE [--steps N] [--warmup N]");
+    throw Error("usage: bullet_peer_bench SCENE [--steps N] [--warmup N] [--csv FILE]");
   if (arguments.steps < 1) throw Error("--steps must be at least 1");
   return arguments;
 }
@@ -143,11 +150,19 @@ int run(int argc, char** argv) {
 
   rusage usage{};
   ::getrusage(RUSAGE_SELF, &usage);
+  const double stepsPerSecond = double(arguments.steps) / seconds;
+  const double peakMiB = double(usage.ru_maxrss) / 1024.0;
   std::printf(
       "peer=bullet scene=%s faces=%zu bodies=%zu dt_ms=%.4g warmup=%ld steps=%ld "
       "steps_per_s=%.1f peak_rss_mb=%.1f\n",
-      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup, arguments.steps,
-      double(arguments.steps) / seconds, double(usage.ru_maxrss) / 1024.0);
+      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup,
+      arguments.steps, stepsPerSecond, peakMiB);
+  if (!arguments.csv.empty())
+    writeFileAtomically(arguments.csv,
+                        cat("peer,scene,faces,bodies,dt_ms,warmup,steps,steps_per_s,peak_rss_mb\n",
+                            "bullet,", scene.setup.name, ",", faces, ",", w.bodies.size(), ",",
+                            dt * 1e3, ",", arguments.warmup, ",", arguments.steps, ",",
+                            stepsPerSecond, ",", peakMiB, "\n"));
   return 0;
 }
 

@@ -92,6 +92,7 @@ void setCounters(benchmark::State& state, const World& world) {
   state.counters["faces"] = double(world.triangles.size());
   state.counters["particles"] = double(world.particleCount());
   state.counters["springs"] = double(world.springs.size());
+  state.counters["contacts"] = 0;  // every run needs every counter for the CSV reporter
 }
 
 /// Copies the prepared simulator of the benchmark's size under a TBB limit of range(1) threads;
