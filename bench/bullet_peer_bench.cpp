@@ -155,14 +155,14 @@ int run(int argc, char** argv) {
   std::printf(
       "peer=bullet scene=%s faces=%zu bodies=%zu dt_ms=%.4g warmup=%ld steps=%ld "
       "steps_per_s=%.1f peak_rss_mb=%.1f\n",
-      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup,
-      arguments.steps, stepsPerSecond, peakMiB);
+      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup, arguments.steps,
+      stepsPerSecond, peakMiB);
   if (!arguments.csv.empty())
-    writeFileAtomically(arguments.csv,
-                        cat("peer,scene,faces,bodies,dt_ms,warmup,steps,steps_per_s,peak_rss_mb\n",
-                            "bullet,", scene.setup.name, ",", faces, ",", w.bodies.size(), ",",
-                            dt * 1e3, ",", arguments.warmup, ",", arguments.steps, ",",
-                            stepsPerSecond, ",", peakMiB, "\n"));
+    writeFileAtomically(
+        arguments.csv,
+        cat("peer,scene,faces,bodies,dt_ms,warmup,steps,steps_per_s,peak_rss_mb\n", "bullet,",
+            scene.setup.name, ",", faces, ",", w.bodies.size(), ",", dt * 1e3, ",",
+            arguments.warmup, ",", arguments.steps, ",", stepsPerSecond, ",", peakMiB, "\n"));
   return 0;
 }
 

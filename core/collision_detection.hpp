@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "core/broad_phase.hpp"
-#include "core/pair_cache.hpp"
 #include "core/line_triangle.hpp"
+#include "core/pair_cache.hpp"
 #include "core/scene_setup.hpp"
 #include "core/stage_timer.hpp"
 #include "core/triangle_pair_test.hpp"

@@ -16,14 +16,29 @@ PngSequenceRenderer::PngSequenceRenderer(const World& world,
 
 // Out of line: FrameRenderer is complete here. When finish() did not run (a failed run), the
 // renderer is destroyed on this thread; its GL objects go with the context.
-PngSequenceRenderer::~PngSequenceRenderer() = default;
+PngSequenceRenderer::~PngSequenceRenderer() {
+  if (pending_.valid()) pending_.wait();  // a failed run: its error was reported elsewhere
+}
+
+void PngSequenceRenderer::collectPending() {
+  if (pending_.valid()) bytes_.fetch_add(pending_.get(), std::memory_order_relaxed);
+}
 
 void PngSequenceRenderer::write(const Frame& frame) {
   if (!renderer_) renderer_ = std::make_unique<FrameRenderer>(scene_, options_);
-  bytes_.fetch_add(renderer_->writePng(frame, framePath(frame.number)), std::memory_order_relaxed);
+  std::vector<std::uint8_t> rgb = renderer_->renderRgb(frame);
+  // The previous frame's encoding ran while this one rendered; its error, if any, surfaces here.
+  collectPending();
+  pending_ =
+      std::async(std::launch::async, [this, rgb = std::move(rgb), path = framePath(frame.number)] {
+        const std::string png = encodePng(rgb, options_.width, options_.height);
+        writeFileAtomically(path, png);
+        return std::uint64_t(png.size());
+      });
 }
 
 void PngSequenceRenderer::finish() {
+  collectPending();
   renderer_.reset();
 }
 

@@ -3,12 +3,17 @@
 ///
 /// The EGL context belongs to the thread that renders: the sink is constructed on the main thread
 /// but FramePipeline calls write() from the sink's own thread, so the context and every GL object
-/// are created by the first write(), and the simulation never waits for a frame to render.
+/// are created by the first write(), and the simulation never waits for a frame to render. Each
+/// frame's PNG encoding and file write run on a helper thread while the next frame renders, so a
+/// frame costs the longer of the two, not their sum; an error there surfaces from the next
+/// write() or from finish().
 
 #include <atomic>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/world.hpp"
 #include "exporters/frame.hpp"
@@ -42,7 +47,11 @@ class PngSequenceRenderer : public FrameSink {
   FrameNaming naming_;
   RenderScene scene_;
   RenderOptions options_;
+  /// Adds the pending frame's bytes once its encoding is done; rethrows its error.
+  void collectPending();
+
   std::unique_ptr<FrameRenderer> renderer_;  ///< made by the first write(), on its thread
+  std::future<std::uint64_t> pending_;       ///< the previous frame's encoding and write
   std::atomic<std::uint64_t> bytes_{0};
 };
 

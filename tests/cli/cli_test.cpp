@@ -227,9 +227,9 @@ TEST_F(CliTest, EveryBroadPhaseWritesTheSameBytesWithAndWithoutThePairCache) {
   std::string reference;
   int variant = 0;
   for (const char* flags :
-       {"--broadphase bvh", "--broadphase sbhash", "--broadphase spatialhash",
-        "--broadphase brute", "--broadphase bvh --no-pair-cache",
-        "--broadphase sbhash --no-pair-cache", "--broadphase spatialhash --no-pair-cache"}) {
+       {"--broadphase bvh", "--broadphase sbhash", "--broadphase spatialhash", "--broadphase brute",
+        "--broadphase bvh --no-pair-cache", "--broadphase sbhash --no-pair-cache",
+        "--broadphase spatialhash --no-pair-cache"}) {
     const fs::path out = folder_ / std::to_string(variant++);
     const Result run = runSoftbake("run " + quoted(scene.string()) + " --frames 30 -q " + flags +
                                    " -o " + quoted(out.string()));
