@@ -110,7 +110,12 @@ def panel(x0, y0, spec):
         if spec.get("markers"):
             for x, y in zip(sx, sy):
                 out.append(f'<circle cx="{px(x):.1f}" cy="{py(y):.1f}" r="3" fill="{colour}"/>')
-        lx, ly = x0 + MARGIN_L + 10, y0 + MARGIN_T + 16 + 16 * i
+        # The legend goes in a corner the data leaves empty: spec["legend"], top-left by default.
+        corner = spec.get("legend", "top-left")
+        count = len(spec["series"])
+        lx = x0 + MARGIN_L + (w - 130 if corner.endswith("right") else 10)
+        ly = (y0 + MARGIN_T + h - 8 - 16 * (count - 1 - i) if corner.startswith("bottom")
+              else y0 + MARGIN_T + 16 + 16 * i)
         out.append(f'<line x1="{lx}" y1="{ly - 4}" x2="{lx + 18}" y2="{ly - 4}" '
                    f'stroke="{colour}" stroke-width="2.5"/>')
         out.append(f'<text x="{lx + 24}" y="{ly}" font-size="12">{name}</text>')
@@ -147,10 +152,11 @@ def fig7_8(rows, window=50):
         collision.setdefault(b, []).append(sum(float(r[k]) for k in (
             "boxes_ms", "broad_phase_ms", "narrow_phase_ms", "response_ms")))
     return [
-        {"title": "Steps per second (the paper's FPS)", "xlabel": "step",
+        {"title": "Steps per second (the paper's FPS)", "xlabel": "step", "legend": "top-right",
          "ylabel": "steps / s", "series": [(b, steps[b], moving_average(fps[b], window))
                                            for b in steps]},
         {"title": "Collision time per step", "xlabel": "step", "ylabel": "ms",
+         "legend": "top-right",
          "series": [(b, steps[b], moving_average(collision[b], window)) for b in steps]},
     ]
 
@@ -162,9 +168,11 @@ def scaling(rows):
             (int(r["faces"]), float(r["steps_per_s"])))
     panels = [
         {"title": "Steps per second", "xlabel": "faces", "ylabel": "steps / s", "logx": True,
+         "legend": "bottom-left",
          "logy": True, "markers": True,
          "series": [(b, [f for f, _ in v], [s for _, s in v]) for b, v in series.items()]},
         {"title": "Time per face and step", "xlabel": "faces", "ylabel": "ns", "logx": True,
+         "legend": "bottom-left",
          "logy": True, "markers": True,
          "series": [(b, [f for f, _ in v], [1e9 / (s * f) for f, s in v])
                     for b, v in series.items()]},
