@@ -15,21 +15,17 @@
 #include <utility>
 #include <vector>
 
+#include "bench/scene_sizes.hpp"
 #include "core/broad_phase.hpp"
 #include "core/icosphere.hpp"
 
 namespace softbake {
 namespace {
 
-/// `balls` icospheres of `subdivisions` levels: 20·4^subdivisions faces each.
-struct SceneSize {
-  int faces, subdivisions, balls;
-};
+using bench::SceneSize;
 
-constexpr SceneSize kSizes[] = {
-    {10240, 4, 2},   // ~10k
-    {102400, 5, 5},  // ~100k
-};
+/// This program's sizes: ~10k and ~100k faces (brute force at 1M would take hours).
+constexpr int kFaces[] = {10240, 102400};
 
 /// Everything BroadPhaseInput views.
 struct Scene {
@@ -75,10 +71,7 @@ const Scene& preparedScene(int faces, bool selfCollision) {
   static std::map<std::pair<int, bool>, Scene> cache;
   const auto key = std::make_pair(faces, selfCollision);
   if (auto it = cache.find(key); it != cache.end()) return it->second;
-  for (const SceneSize& size : kSizes)
-    if (size.faces == faces)
-      return cache.emplace(key, ballsScene(size, selfCollision)).first->second;
-  throw std::runtime_error("no scene of " + std::to_string(faces) + " faces");
+  return cache.emplace(key, ballsScene(bench::sceneSize(faces), selfCollision)).first->second;
 }
 
 void BM_FindPairs(benchmark::State& state, BroadPhaseKind kind) {
@@ -97,12 +90,12 @@ void BM_FindPairs(benchmark::State& state, BroadPhaseKind kind) {
 }
 
 void allSizes(benchmark::internal::Benchmark* b) {
-  for (const SceneSize& size : kSizes)
-    for (int self : {0, 1}) b->Args({size.faces, self});
+  for (int faces : kFaces)
+    for (int self : {0, 1}) b->Args({faces, self});
 }
 
 void smallestSize(benchmark::internal::Benchmark* b) {
-  for (int self : {0, 1}) b->Args({kSizes[0].faces, self});
+  for (int self : {0, 1}) b->Args({kFaces[0], self});
 }
 
 BENCHMARK_CAPTURE(BM_FindPairs, sbhash, BroadPhaseKind::BoxHash)

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/scene_sizes.hpp"
 #include "core/error.hpp"
 #include "core/forces.hpp"
 #include "core/icosphere.hpp"
@@ -29,17 +30,8 @@
 namespace softbake {
 namespace {
 
-/// A scene of `balls` icospheres of `subdivisions` levels: 20·4^subdivisions faces each.
-struct SceneSize {
-  int faces, subdivisions, balls;
-};
-
-constexpr SceneSize kSizes[] = {
-    {1280, 3, 1},     // ~1k
-    {10240, 4, 2},    // ~10k
-    {102400, 5, 5},   // ~100k
-    {983040, 6, 12},  // ~1M
-};
+using bench::kSceneSizes;
+using bench::SceneSize;
 
 /// Substeps run before timing, so springs are stretched, the gas is pressed and the balls rest
 /// on the ground: the stages then see a state from a real run, not the rest shape.
@@ -75,16 +67,12 @@ SceneSetup ballsScene(const SceneSize& size) {
 const Simulator& preparedSimulator(int faces) {
   static std::map<int, Simulator> cache;
   if (auto it = cache.find(faces); it != cache.end()) return it->second;
-  for (const SceneSize& size : kSizes) {
-    if (size.faces != faces) continue;
-    Simulator simulator(buildWorld(ballsScene(size)));
-    if (simulator.world().triangles.size() != std::size_t(faces))
-      throw std::runtime_error("scene has " + std::to_string(simulator.world().triangles.size()) +
-                               " faces, not " + std::to_string(faces));
-    for (int s = 0; s < kWarmUpSubsteps; ++s) simulator.step(1);
-    return cache.emplace(faces, std::move(simulator)).first->second;
-  }
-  throw std::runtime_error("no scene of " + std::to_string(faces) + " faces");
+  Simulator simulator(buildWorld(ballsScene(bench::sceneSize(faces))));
+  if (simulator.world().triangles.size() != std::size_t(faces))
+    throw std::runtime_error("scene has " + std::to_string(simulator.world().triangles.size()) +
+                             " faces, not " + std::to_string(faces));
+  for (int s = 0; s < kWarmUpSubsteps; ++s) simulator.step(1);
+  return cache.emplace(faces, std::move(simulator)).first->second;
 }
 
 void setCounters(benchmark::State& state, const World& world) {
@@ -215,7 +203,7 @@ void BM_Step(benchmark::State& state) {
 
 void sizesAndThreads(benchmark::internal::Benchmark* b) {
   b->ArgNames({"faces", "threads"});
-  for (const SceneSize& size : kSizes)
+  for (const SceneSize& size : kSceneSizes)
     for (int threads : {1, 2}) b->Args({size.faces, threads});
   b->UseRealTime()->Unit(benchmark::kMicrosecond);
   // On a shared machine the fastest repetition is the one least disturbed by other work.

@@ -11,6 +11,22 @@
 #define SOFTBAKE_VERSION "unknown"
 #endif
 
+namespace {
+
+/// `--substeps`: "auto" or a whole number of at least 1; the message CLI11 shows otherwise.
+std::string checkSubsteps(const std::string& value) {
+  if (value == "auto") return {};
+  try {
+    std::size_t used = 0;
+    const int count = std::stoi(value, &used);
+    if (used == value.size() && count >= 1) return {};
+  } catch (...) {
+  }
+  return "expected 'auto' or a whole number >= 1, got '" + value + "'";
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"softbake " SOFTBAKE_VERSION
                " - offline soft-body simulation (Matyka-Ollila pressure bodies, Mesit-Guha "
@@ -31,16 +47,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 10000000));
   runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
   runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
-      ->check([](const std::string& value) -> std::string {
-        if (value == "auto") return {};
-        try {
-          std::size_t used = 0;
-          const int count = std::stoi(value, &used);
-          if (used == value.size() && count >= 1) return {};
-        } catch (...) {
-        }
-        return "expected 'auto' or a whole number >= 1, got '" + value + "'";
-      });
+      ->check(checkSubsteps);
   runApp->add_option("--frame-padding", run.framePadding, "digits of the frame number in names")
       ->check(CLI::Range(1, 9));
   runApp
@@ -121,16 +128,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1L, 1000000000L))
       ->excludes(benchFrames);
   benchApp->add_option("--substeps", bench.substeps, "substeps per frame, or 'auto'")
-      ->check([](const std::string& value) -> std::string {
-        if (value == "auto") return {};
-        try {
-          std::size_t used = 0;
-          const int count = std::stoi(value, &used);
-          if (used == value.size() && count >= 1) return {};
-        } catch (...) {
-        }
-        return "expected 'auto' or a whole number >= 1, got '" + value + "'";
-      });
+      ->check(checkSubsteps);
   benchApp
       ->add_option("--broadphase", bench.broadPhases,
                    "broad phases to run one after the other: sbhash, spatialhash, bvh, brute "
