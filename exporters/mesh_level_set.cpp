@@ -73,7 +73,34 @@ struct TriangleGeometry {
   Vec3s centre;  ///< of the corners; with `radius`, a sphere holding the triangle
   float radius;
   openvdb::Coord lo, hi;  ///< the voxels that can lie within the band of it (inclusive)
+
+  /// How many 8³ leaves lo..hi spans.
+  std::size_t leafCount() const {
+    std::size_t leaves = 1;
+    for (int axis = 0; axis < 3; ++axis)
+      leaves *= std::size_t((hi[axis] >> kLeafLog2) - (lo[axis] >> kLeafLog2) + 1);
+    return leaves;
+  }
 };
+
+/// The triangle's corners, normal, bounding sphere and reach (`band` voxels around its box).
+TriangleGeometry triangleGeometry(const Vec3s& a, const Vec3s& b, const Vec3s& c, float band) {
+  TriangleGeometry g;
+  g.a = a;
+  g.b = b;
+  g.c = c;
+  const Vec3s n = (b - a).cross(c - a);
+  const float length = n.length();
+  g.normal = length > 0 ? n / length : Vec3s(0.0f);
+  g.centre = (a + b + c) / 3.0f;
+  g.radius = std::sqrt(std::max(
+      {(a - g.centre).lengthSqr(), (b - g.centre).lengthSqr(), (c - g.centre).lengthSqr()}));
+  for (int axis = 0; axis < 3; ++axis) {
+    g.lo[axis] = int(std::ceil(std::min({a[axis], b[axis], c[axis]}) - band));
+    g.hi[axis] = int(std::floor(std::max({a[axis], b[axis], c[axis]}) + band));
+  }
+  return g;
+}
 
 std::uint64_t leafKey(const openvdb::Coord& leaf) {
   return (std::uint64_t(leaf.x() + kKeyOffset) << 42) |
@@ -92,6 +119,62 @@ struct LeafTriangle {
   std::uint32_t triangle;
   bool operator<(const LeafTriangle& other) const {
     return std::tie(leaf, triangle) < std::tie(other.leaf, other.triangle);
+  }
+};
+
+/// The nearest triangle of every voxel of one 8³ leaf, by brute force over the triangles whose
+/// band reaches the leaf; a plane-distance and a bounding-sphere bound skip most of them.
+struct NearestInLeaf {
+  openvdb::Coord origin;
+  float band = 0;
+  float best[FloatLeaf::SIZE];          ///< squared distance to the nearest triangle so far
+  float bestDistance[FloatLeaf::SIZE];  ///< its square root
+  std::int32_t nearest[FloatLeaf::SIZE];
+
+  void reset(const openvdb::Coord& leafOrigin, float bandWidth) {
+    origin = leafOrigin;
+    band = bandWidth;
+    std::fill(std::begin(best), std::end(best), band * band);
+    std::fill(std::begin(bestDistance), std::end(bestDistance), band);
+    std::fill(std::begin(nearest), std::end(nearest), -1);
+  }
+
+  void consider(std::uint32_t t, const TriangleGeometry& g) {
+    const openvdb::Coord lo = openvdb::Coord::maxComponent(g.lo, origin);
+    const openvdb::Coord hi = openvdb::Coord::minComponent(g.hi, origin.offsetBy(kLeafMask));
+    for (int x = lo.x(); x <= hi.x(); ++x) {
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        // Only the run of the column inside the slab |plane distance| < band can be near.
+        int zLo = lo.z(), zHi = hi.z();
+        const float base = g.normal.x() * (float(x) - g.a.x()) +
+                           g.normal.y() * (float(y) - g.a.y()) - g.normal.z() * g.a.z();
+        if (std::abs(g.normal.z()) > 1e-6f) {
+          float z0 = (-band - base) / g.normal.z(), z1 = (band - base) / g.normal.z();
+          if (z0 > z1) std::swap(z0, z1);
+          zLo = std::max(zLo, int(std::ceil(z0)));
+          zHi = std::min(zHi, int(std::floor(z1)));
+        } else if (std::abs(base) >= band) {
+          continue;
+        }
+        for (int z = zLo; z <= zHi; ++z) {
+          const Vec3s p{float(x), float(y), float(z)};
+          const int offset = ((x & kLeafMask) << 6) | ((y & kLeafMask) << 3) | (z & kLeafMask);
+          const float plane = g.normal.dot(p - g.a);
+          if (plane * plane >= best[offset]) continue;
+          // Neighbours on a smooth surface are nearly coplanar, so the plane rarely rejects
+          // them; their distance from the voxel's side does, through the bounding sphere.
+          const float near = g.radius + bestDistance[offset];
+          if ((p - g.centre).lengthSqr() >= near * near) continue;
+          const NearestPoint q = nearestOnTriangle(p, g.a, g.b, g.c);
+          const float squared = (p - (q.u * g.a + q.v * g.b + q.w * g.c)).lengthSqr();
+          if (squared < best[offset]) {
+            best[offset] = squared;
+            bestDistance[offset] = std::sqrt(squared);
+            nearest[offset] = std::int32_t(t);
+          }
+        }
+      }
+    }
   }
 };
 
@@ -156,34 +239,17 @@ MeshLevelSet::Grids MeshLevelSet::build(const std::vector<openvdb::Vec3s>& point
                         " a level set can index: use a larger voxel size"));
 
   const std::size_t triangleCount = triangles_.size();
-  const float bandSquared = band * band;
   const float background = float(band * voxelSize);
 
-  // Per triangle: corners, unit normal and the voxels its band can reach.
+  // Per triangle: corners, unit normal, bounding sphere and the voxels its band can reach.
   std::vector<TriangleGeometry> geometry(triangleCount);
   std::vector<std::size_t> leafCount(triangleCount + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangleCount, 1024), [&](const auto& r) {
     for (std::size_t t = r.begin(); t != r.end(); ++t) {
-      TriangleGeometry& g = geometry[t];
-      g.a = points[triangles_[t][0]];
-      g.b = points[triangles_[t][1]];
-      g.c = points[triangles_[t][2]];
-      const Vec3s n = (g.b - g.a).cross(g.c - g.a);
-      const float length = n.length();
-      g.normal = length > 0 ? n / length : Vec3s(0.0f);
-      g.centre = (g.a + g.b + g.c) / 3.0f;
-      g.radius = std::sqrt(std::max({(g.a - g.centre).lengthSqr(), (g.b - g.centre).lengthSqr(),
-                                     (g.c - g.centre).lengthSqr()}));
-      for (int axis = 0; axis < 3; ++axis) {
-        const float low = std::min({g.a[axis], g.b[axis], g.c[axis]}) - band;
-        const float high = std::max({g.a[axis], g.b[axis], g.c[axis]}) + band;
-        g.lo[axis] = int(std::ceil(low));
-        g.hi[axis] = int(std::floor(high));
-      }
-      std::size_t leaves = 1;
-      for (int axis = 0; axis < 3; ++axis)
-        leaves *= std::size_t((g.hi[axis] >> kLeafLog2) - (g.lo[axis] >> kLeafLog2) + 1);
-      leafCount[t + 1] = leaves;
+      const TriangleIndices& corners = triangles_[t];
+      geometry[t] =
+          triangleGeometry(points[corners[0]], points[corners[1]], points[corners[2]], band);
+      leafCount[t + 1] = geometry[t].leafCount();
     }
   });
   for (std::size_t t = 0; t < triangleCount; ++t) leafCount[t + 1] += leafCount[t];
@@ -261,67 +327,26 @@ MeshLevelSet::Grids MeshLevelSet::build(const std::vector<openvdb::Vec3s>& point
   std::vector<FloatLeaf*> distanceLeaves(leafTotal, nullptr);
   std::vector<VelocityLeaf*> velocityLeaves(leafTotal, nullptr);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafTotal, 4), [&](const auto& r) {
-    float best[FloatLeaf::SIZE], bestDistance[FloatLeaf::SIZE];  // squared and not
-    std::int32_t nearest[FloatLeaf::SIZE];
+    NearestInLeaf nearer;
     for (std::size_t leaf = r.begin(); leaf != r.end(); ++leaf) {
       const openvdb::Coord origin = leafOrigin(pairs[leafStart[leaf]].leaf);
-      std::fill(std::begin(best), std::end(best), bandSquared);
-      std::fill(std::begin(bestDistance), std::end(bestDistance), band);
-      std::fill(std::begin(nearest), std::end(nearest), -1);
-      for (std::size_t i = leafStart[leaf]; i < leafStart[leaf + 1]; ++i) {
-        const std::uint32_t t = pairs[i].triangle;
-        const TriangleGeometry& g = geometry[t];
-        const openvdb::Coord lo = openvdb::Coord::maxComponent(g.lo, origin);
-        const openvdb::Coord hi = openvdb::Coord::minComponent(g.hi, origin.offsetBy(kLeafMask));
-        for (int x = lo.x(); x <= hi.x(); ++x) {
-          for (int y = lo.y(); y <= hi.y(); ++y) {
-            // Only the run of the column inside the slab |plane distance| < band can be near.
-            int zLo = lo.z(), zHi = hi.z();
-            const float base = g.normal.x() * (float(x) - g.a.x()) +
-                               g.normal.y() * (float(y) - g.a.y()) - g.normal.z() * g.a.z();
-            if (std::abs(g.normal.z()) > 1e-6f) {
-              float z0 = (-band - base) / g.normal.z(), z1 = (band - base) / g.normal.z();
-              if (z0 > z1) std::swap(z0, z1);
-              zLo = std::max(zLo, int(std::ceil(z0)));
-              zHi = std::min(zHi, int(std::floor(z1)));
-            } else if (std::abs(base) >= band) {
-              continue;
-            }
-            for (int z = zLo; z <= zHi; ++z) {
-              const Vec3s p{float(x), float(y), float(z)};
-              const int offset = ((x & kLeafMask) << 6) | ((y & kLeafMask) << 3) | (z & kLeafMask);
-              const float plane = g.normal.dot(p - g.a);
-              if (plane * plane >= best[offset]) continue;
-              // Neighbours on a smooth surface are nearly coplanar, so the plane rarely rejects
-              // them; their distance from the voxel's side does, through the bounding sphere.
-              const float near = g.radius + bestDistance[offset];
-              if ((p - g.centre).lengthSqr() >= near * near) continue;
-              const NearestPoint q = nearestOnTriangle(p, g.a, g.b, g.c);
-              const float squared = (p - (q.u * g.a + q.v * g.b + q.w * g.c)).lengthSqr();
-              if (squared < best[offset]) {
-                best[offset] = squared;
-                bestDistance[offset] = std::sqrt(squared);
-                nearest[offset] = std::int32_t(t);
-              }
-            }
-          }
-        }
-      }
-
+      nearer.reset(origin, band);
+      for (std::size_t i = leafStart[leaf]; i < leafStart[leaf + 1]; ++i)
+        nearer.consider(pairs[i].triangle, geometry[pairs[i].triangle]);
       auto distance = std::make_unique<FloatLeaf>(origin, background, false);
       std::unique_ptr<VelocityLeaf> velocity;
       if (velocities) velocity = std::make_unique<VelocityLeaf>(origin, Vec3s(0.0f), false);
       bool any = false;
       for (openvdb::Index offset = 0; offset < FloatLeaf::SIZE; ++offset) {
-        if (nearest[offset] < 0) continue;
-        const std::uint32_t t = std::uint32_t(nearest[offset]);
+        if (nearer.nearest[offset] < 0) continue;
+        const std::uint32_t t = std::uint32_t(nearer.nearest[offset]);
         const TriangleGeometry& g = geometry[t];
         const Vec3s p = FloatLeaf::offsetToLocalCoord(offset)
                             .offsetBy(origin.x(), origin.y(), origin.z())
                             .asVec3s();
         const NearestPoint q = nearestOnTriangle(p, g.a, g.b, g.c);
         const Vec3s away = p - (q.u * g.a + q.v * g.b + q.w * g.c);
-        float value = std::sqrt(best[offset]);
+        float value = std::sqrt(nearer.best[offset]);
         if (closed_ && away.dot(pseudonormal(t, q.feature)) < 0) value = -value;
         distance->setValueOn(offset, float(value * voxelSize));
         if (velocity) {
