@@ -90,15 +90,9 @@ int bench(const BenchOptions& options) {
       int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
   const SceneFile loaded = loadSceneInput(options.input);
-  std::vector<BroadPhaseKind> kinds;
-  for (const std::string& name : options.broadPhases) {
-    BroadPhaseKind kind{};
-    if (!parseBroadPhase(name, kind))
-      throw Error(
-          cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '", name, "'"));
-    kinds.push_back(kind);
-  }
-  if (kinds.empty()) kinds.push_back(loaded.setup.settings.collisions.broadPhase);
+  std::vector<std::optional<std::string>> broadPhases(options.broadPhases.begin(),
+                                                      options.broadPhases.end());
+  if (broadPhases.empty()) broadPhases.emplace_back();  // the scene's
 
   std::string csv =
       "broadphase,step,frame,forces_ms,integration_ms,boxes_ms,broad_phase_ms,narrow_phase_ms,"
@@ -107,16 +101,13 @@ int bench(const BenchOptions& options) {
   if (options.withExports && options.out.empty()) scratch.emplace();
   const fs::path exportFolder = scratch ? scratch->path() : options.out;
 
-  for (BroadPhaseKind kind : kinds) {
+  for (const std::optional<std::string>& requestedBroadPhase : broadPhases) {
     SceneFile scene = loaded;
     SimulationSettings& settings = scene.setup.settings;
-    if (options.frames) settings.frames = *options.frames;
-    if (options.substeps)
-      settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
-    settings.collisions.broadPhase = kind;
-    if (options.levels) settings.collisions.subdivisionLevels = *options.levels;
-    if (options.noPairCache) settings.collisions.pairCache = false;
-    const std::string broadPhase(broadPhaseName(kind));
+    SimulationOverrides overrides = options;
+    overrides.broadPhase = requestedBroadPhase;
+    applySimulationOverrides(overrides, settings);
+    const std::string broadPhase(broadPhaseName(settings.collisions.broadPhase));
 
     Simulator simulator(buildWorld(scene.setup));
     const World& world = simulator.world();

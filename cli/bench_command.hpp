@@ -16,17 +16,16 @@
 #include <string>
 #include <vector>
 
+#include "cli/scene_input.hpp"
+
 namespace softbake {
 
-struct BenchOptions {
+/// The overrides' `broadPhase` is unused: `broadPhases` lists the ones to run.
+struct BenchOptions : SimulationOverrides {
   std::string input;                     ///< scene .json, mesh file or built-in scene name
-  std::optional<int> frames;             ///< frames of the scene to simulate (overrides it)
   std::optional<long> steps;             ///< exact substep count instead of whole frames
-  std::optional<std::string> substeps;   ///< "auto" or a count per frame
   std::vector<std::string> broadPhases;  ///< empty: the scene's
-  std::optional<int> levels;             ///< sbhash subdivision level (overrides the scene)
   long warmupSteps = 0;                  ///< steps simulated before measuring, not reported
-  bool noPairCache = false;              ///< run the broad phase every step (to compare them)
   int threads = 0;                       ///< 0: all cores
   std::optional<std::filesystem::path> csv;
   bool withExports = false;

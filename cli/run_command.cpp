@@ -29,22 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 
 void applyOverrides(const RunOptions& options, SceneFile& scene) {
-  SimulationSettings& settings = scene.setup.settings;
-  if (options.frames) settings.frames = *options.frames;
-  if (options.fps) settings.fps = *options.fps;
-  if (options.substeps)
-    settings.substeps = *options.substeps == "auto" ? 0 : std::stoi(*options.substeps);
+  applySimulationOverrides(options, scene.setup.settings);
   if (options.framePadding) scene.output.framePadding = *options.framePadding;
-  CollisionSettings& collisions = settings.collisions;
-  if (options.broadPhase && !parseBroadPhase(*options.broadPhase, collisions.broadPhase))
-    throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '",
-                    *options.broadPhase, "'"));
-  if (options.response && !parseResponseMode(*options.response, collisions.response))
-    throw Error(
-        cat("--response: expected two-sided, paper or none, got '", *options.response, "'"));
-  if (options.noResponse) collisions.response = ResponseMode::None;
-  if (options.levels) collisions.subdivisionLevels = *options.levels;
-  if (options.noPairCache) collisions.pairCache = false;
   if (options.contacts) scene.output.contacts = true;
   if (options.render) scene.output.png = *options.render;
   if (options.vdb) scene.output.vdb = true;

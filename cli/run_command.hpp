@@ -6,25 +6,19 @@
 #include <optional>
 #include <string>
 
+#include "cli/scene_input.hpp"
+
 namespace softbake {
 
-struct RunOptions {
+struct RunOptions : SimulationOverrides {
   std::string input;  ///< scene .json, a mesh file, or empty for the built-in default scene
   std::filesystem::path out = "out";
-  std::optional<int> frames;
-  std::optional<double> fps;
-  std::optional<std::string> substeps;  ///< "auto" or a count
   std::optional<int> framePadding;
-  std::optional<std::string> broadPhase;  ///< "sbhash", "spatialhash", "bvh", "brute"
-  std::optional<std::string> response;    ///< "two-sided", "paper", "none"
-  std::optional<int> levels;              ///< sbhash subdivision level
-  bool noResponse = false;                ///< detection only: --response none
-  bool noPairCache = false;               ///< run the broad phase every substep
-  bool contacts = false;                  ///< write OUT/contacts/<scene>_0001.json …
-  std::optional<bool> render;             ///< --render / --no-render; unset: the scene's choice
-  std::optional<std::string> size;        ///< "1280x720"
-  bool noContactSpheres = false;          ///< render without the contact spheres
-  bool vdb = false;                       ///< write OUT/vdb/<scene>_0001.vdb …
+  bool contacts = false;            ///< write OUT/contacts/<scene>_0001.json …
+  std::optional<bool> render;       ///< --render / --no-render; unset: the scene's choice
+  std::optional<std::string> size;  ///< "1280x720"
+  bool noContactSpheres = false;    ///< render without the contact spheres
+  bool vdb = false;                 ///< write OUT/vdb/<scene>_0001.vdb …
   std::optional<double> voxelSize;
   bool vdbFog = false;
   std::optional<std::string> upAxis;          ///< "y" or "z", for the VDB export

@@ -26,4 +26,21 @@ SceneFile loadSceneInput(const std::string& input) {
   return sceneFromMeshFile(path);
 }
 
+void applySimulationOverrides(const SimulationOverrides& overrides, SimulationSettings& settings) {
+  if (overrides.frames) settings.frames = *overrides.frames;
+  if (overrides.fps) settings.fps = *overrides.fps;
+  if (overrides.substeps)
+    settings.substeps = *overrides.substeps == "auto" ? 0 : std::stoi(*overrides.substeps);
+  CollisionSettings& collisions = settings.collisions;
+  if (overrides.broadPhase && !parseBroadPhase(*overrides.broadPhase, collisions.broadPhase))
+    throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '",
+                    *overrides.broadPhase, "'"));
+  if (overrides.response && !parseResponseMode(*overrides.response, collisions.response))
+    throw Error(
+        cat("--response: expected two-sided, paper or none, got '", *overrides.response, "'"));
+  if (overrides.noResponse) collisions.response = ResponseMode::None;
+  if (overrides.levels) collisions.subdivisionLevels = *overrides.levels;
+  if (overrides.noPairCache) collisions.pairCache = false;
+}
+
 }  // namespace softbake
