@@ -181,12 +181,8 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
   const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
     return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
   };
+  // Each (particle, triangle) was tested from one pair only, so the hits are unique already.
   std::sort(particleContacts_.begin(), particleContacts_.end(), byParticleTriangle);
-  particleContacts_.erase(std::unique(particleContacts_.begin(), particleContacts_.end(),
-                                      [](const ParticleContact& a, const ParticleContact& b) {
-                                        return a.particle == b.particle && a.triangle == b.triangle;
-                                      }),
-                          particleContacts_.end());
   // Hits are sorted by particle, so each particle's contacts are adjacent; within one
   // particle, the earliest crossing comes first, ties kept in triangle order. The groups are a
   // handful of contacts: an insertion sort, which is stable and, unlike std::stable_sort,
