@@ -149,7 +149,6 @@ VdbSequenceWriter::VdbSequenceWriter(const World& world,
     data.name = std::move(unique);
     data.firstParticle = body.firstParticle;
     data.particleCount = body.particleCount;
-    data.closed = body.closed;
     std::vector<MeshLevelSet::TriangleIndices> triangles;
     triangles.reserve(body.triangleCount);
     for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
@@ -226,11 +225,11 @@ void VdbSequenceWriter::write(const Frame& frame) {
                              float(options_.bandWidth), voxelSize_);
 
     openvdb::FloatGrid::Ptr surface = level.distance;
-    surface->setName(gridName(b, body.closed ? "surface" : "surface_udf"));
+    surface->setName(gridName(b, body.levelSet->closed() ? "surface" : "surface_udf"));
     addMetadata(*surface, body.name);
     grids.push_back(surface);
 
-    if (options_.fog && body.closed) {
+    if (options_.fog && body.levelSet->closed()) {
       openvdb::FloatGrid::Ptr fog = surface->deepCopy();
       openvdb::tools::sdfToFogVolume(*fog);
       fog->setName(gridName(b, "density"));

@@ -97,8 +97,7 @@ class VdbSequenceWriter : public FrameSink {
   struct BodyData {
     std::string name;  ///< sanitized: letters, digits and '_'
     Index firstParticle = 0, particleCount = 0;
-    std::shared_ptr<const MeshLevelSet> levelSet;  ///< its triangles, body-local
-    bool closed = false;
+    std::shared_ptr<const MeshLevelSet> levelSet;  ///< its triangles (body-local) and closedness
   };
 
   std::filesystem::path outputDirectory_;
