@@ -11,7 +11,8 @@ packages=(
   libeigen3-dev libtbb-dev             # core
   libassimp-dev nlohmann-json3-dev     # importers
   libopenvdb-dev libboost-iostreams-dev  # exporters (Debian's FindOpenVDB needs boost-iostreams)
-  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libstb-dev  # render: EGL on Mesa's llvmpipe
+  libegl-dev libgl-dev libopengl-dev   # render: the GL and EGL link libraries (FindOpenGL needs libOpenGL)
+  libegl-mesa0 libgl1-mesa-dri libstb-dev  # render: EGL on Mesa's llvmpipe
   zlib1g-dev                           # render: PNG deflate
   libcli11-dev                         # cli
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
