@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "bench/scene_sizes.hpp"
-#include "core/broad_phase.hpp"
-#include "core/icosphere.hpp"
+#include "core/collision/broad_phase.hpp"
+#include "core/mesh/icosphere.hpp"
 
 namespace softbake {
 namespace {
@@ -98,7 +98,7 @@ void smallestSize(benchmark::internal::Benchmark* b) {
   for (int self : {0, 1}) b->Args({kFaces[0], self});
 }
 
-BENCHMARK_CAPTURE(BM_FindPairs, sbhash, BroadPhaseKind::BoxHash)
+BENCHMARK_CAPTURE(BM_FindPairs, sbhash, BroadPhaseKind::Sbhash)
     ->Apply(allSizes)
     ->ArgNames({"faces", "self"})
     ->Unit(benchmark::kMicrosecond);

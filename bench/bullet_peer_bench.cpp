@@ -34,7 +34,7 @@
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 namespace softbake {
 namespace {

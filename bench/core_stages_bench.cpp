@@ -19,13 +19,13 @@
 
 #include "bench/scene_sizes.hpp"
 #include "core/error.hpp"
-#include "core/forces.hpp"
-#include "core/icosphere.hpp"
-#include "core/integrator.hpp"
-#include "core/material.hpp"
-#include "core/plane_contact.hpp"
+#include "core/dynamics/forces.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/dynamics/integrator.hpp"
+#include "core/dynamics/material.hpp"
+#include "core/collision/plane_contact.hpp"
 #include "core/simulator.hpp"
-#include "core/world.hpp"
+#include "core/scene/world.hpp"
 
 namespace softbake {
 namespace {

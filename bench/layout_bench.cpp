@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "core/icosphere.hpp"
-#include "core/material.hpp"
-#include "core/stability.hpp"
-#include "core/world.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/dynamics/material.hpp"
+#include "core/dynamics/stability.hpp"
+#include "core/scene/world.hpp"
 
 namespace softbake {
 namespace {

@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "core/line_triangle.hpp"
-#include "core/triangle_pair_test.hpp"
+#include "core/collision/line_triangle.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
 
 namespace softbake {
 namespace {

@@ -15,8 +15,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/cube_sphere.hpp"
-#include "core/world.hpp"
+#include "core/mesh/cube_sphere.hpp"
+#include "core/scene/world.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 
 namespace softbake {

@@ -14,7 +14,7 @@
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "render/png_sequence_renderer.hpp"

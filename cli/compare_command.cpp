@@ -9,7 +9,7 @@
 #include "cli/image_compare.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 namespace softbake {
 

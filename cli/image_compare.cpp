@@ -7,7 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 // Static, so these copies never clash with the renderer's own stb implementation in one binary.
 #define STB_IMAGE_STATIC

@@ -15,8 +15,8 @@
 #include "core/simulator.hpp"
 #include "core/text.hpp"
 #include "exporters/contact_writer.hpp"
-#include "exporters/frame_pipeline.hpp"
-#include "exporters/manifest.hpp"
+#include "output/frame_pipeline.hpp"
+#include "output/manifest.hpp"
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
@@ -136,7 +136,7 @@ int run(const RunOptions& options) {
   if (simulator.collides())
     std::printf("collisions: %s broad phase%s, %s response\n",
                 std::string(broadPhaseName(collisions.broadPhase)).c_str(),
-                collisions.broadPhase == BroadPhaseKind::BoxHash
+                collisions.broadPhase == BroadPhaseKind::Sbhash
                     ? cat(" (level ", collisions.subdivisionLevels, ")").c_str()
                     : "",
                 std::string(responseModeName(collisions.response)).c_str());

@@ -1,11 +1,11 @@
 #include "core/simulator.hpp"
 
 #include "core/error.hpp"
-#include "core/forces.hpp"
-#include "core/integrator.hpp"
-#include "core/plane_contact.hpp"
+#include "core/dynamics/forces.hpp"
+#include "core/dynamics/integrator.hpp"
+#include "core/collision/plane_contact.hpp"
 #include "core/text.hpp"
-#include "core/weld.hpp"
+#include "core/mesh/weld.hpp"
 
 namespace softbake {
 

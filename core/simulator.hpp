@@ -8,12 +8,12 @@
 
 #include <vector>
 
-#include "core/collision_detection.hpp"
-#include "core/collision_response.hpp"
-#include "core/contact.hpp"
-#include "core/stability.hpp"
+#include "core/collision/detection.hpp"
+#include "core/collision/response.hpp"
+#include "core/collision/contact.hpp"
+#include "core/dynamics/stability.hpp"
 #include "core/stage_timer.hpp"
-#include "core/world.hpp"
+#include "core/scene/world.hpp"
 
 namespace softbake {
 

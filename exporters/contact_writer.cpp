@@ -2,7 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 namespace softbake {
 

@@ -6,10 +6,10 @@
 #include <set>
 
 #include "core/error.hpp"
-#include "core/normals.hpp"
+#include "core/mesh/normals.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
-#include "exporters/version.hpp"
+#include "output/atomic_file.hpp"
+#include "output/version.hpp"
 
 namespace softbake {
 

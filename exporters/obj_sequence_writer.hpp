@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "core/world.hpp"
-#include "exporters/frame.hpp"
-#include "exporters/frame_naming.hpp"
-#include "exporters/manifest.hpp"
+#include "core/scene/world.hpp"
+#include "output/frame.hpp"
+#include "output/frame_naming.hpp"
+#include "output/manifest.hpp"
 
 namespace softbake {
 

@@ -13,9 +13,9 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 #include "exporters/mesh_level_set.hpp"
-#include "exporters/version.hpp"
+#include "output/version.hpp"
 
 namespace softbake {
 

@@ -23,7 +23,7 @@ namespace softbake {
 
 namespace {
 
-// Welding (core/weld.hpp) replaces JoinIdenticalVertices, and walking the node tree ourselves
+// Welding (core/mesh/weld.hpp) replaces JoinIdenticalVertices, and walking the node tree ourselves
 // replaces PreTransformVertices, which would bake mirrored instances without fixing their winding.
 constexpr unsigned kPostProcess =
     aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/triangle_mesh.hpp"
+#include "core/mesh/triangle_mesh.hpp"
 
 namespace softbake {
 

@@ -4,7 +4,7 @@
 #include <Eigen/Geometry>
 
 #include "core/error.hpp"
-#include "core/material.hpp"
+#include "core/dynamics/material.hpp"
 #include "core/text.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/mesh_transform.hpp"

@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/triangle_mesh.hpp"
+#include "core/mesh/triangle_mesh.hpp"
 
 namespace softbake {
 

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
-#include "core/icosphere.hpp"
+#include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "importers/json_reader.hpp"
 #include "importers/mesh_import.hpp"

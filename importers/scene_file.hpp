@@ -10,7 +10,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "core/scene_setup.hpp"
+#include "core/scene/scene_setup.hpp"
 
 namespace softbake {
 

@@ -33,10 +33,10 @@ unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int
 #include <numbers>
 
 #include "core/error.hpp"
-#include "core/icosphere.hpp"
-#include "core/normals.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/mesh/normals.hpp"
 #include "core/text.hpp"
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 namespace softbake {
 

@@ -16,8 +16,8 @@
 
 #include <Eigen/Core>
 
-#include "core/world.hpp"
-#include "exporters/frame.hpp"
+#include "core/scene/world.hpp"
+#include "output/frame.hpp"
 #include "render/egl_context.hpp"
 
 namespace softbake {

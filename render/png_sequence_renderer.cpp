@@ -1,6 +1,6 @@
 #include "render/png_sequence_renderer.hpp"
 
-#include "exporters/atomic_file.hpp"
+#include "output/atomic_file.hpp"
 
 namespace softbake {
 

@@ -1,9 +1,9 @@
 // Completeness of the broad phases: on random triangle soups and on deforming, overlapping
 // icospheres, every broad phase returns exactly brute force's pairs, and brute force returns
-// exactly what the definition in core/broad_phase.hpp says.
+// exactly what the definition in core/collision/broad_phase.hpp says.
 
-#include "core/broad_phase.hpp"
-#include "core/pair_cache.hpp"
+#include "core/collision/broad_phase.hpp"
+#include "core/collision/pair_cache.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -18,10 +18,10 @@
 #include <random>
 #include <string>
 
-#include "core/box_hash_broad_phase.hpp"
-#include "core/bvh_broad_phase.hpp"
-#include "core/icosphere.hpp"
-#include "core/spatial_hash_broad_phase.hpp"
+#include "core/collision/sbhash_broad_phase.hpp"
+#include "core/collision/bvh_broad_phase.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/collision/spatial_hash_broad_phase.hpp"
 #include "core/text.hpp"
 #include "tests/core/allocation_counter.hpp"
 
@@ -33,7 +33,7 @@ void PrintTo(const TrianglePair& pair, std::ostream* out) {
 
 namespace {
 
-constexpr BroadPhaseKind kFastKinds[] = {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+constexpr BroadPhaseKind kFastKinds[] = {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                                          BroadPhaseKind::Bvh};
 
 /// Surfaces, triangles and boxes in the layout BroadPhaseInput reads; owns what the spans view.
@@ -131,7 +131,7 @@ void expectAllKindsMatchBrute(const Soup& soup, const std::string& scene) {
   const std::vector<TrianglePair> expected = brutePairs(input);
   for (int levels = 1; levels <= 4; ++levels) {
     for (BroadPhaseKind kind : kFastKinds) {
-      if (kind != BroadPhaseKind::BoxHash && levels > 1) continue;  // only sbhash has levels
+      if (kind != BroadPhaseKind::Sbhash && levels > 1) continue;  // only sbhash has levels
       const auto broadPhase = makeBroadPhase(kind, {levels});
       const std::vector<TrianglePair> actual = run(*broadPhase, input);
       EXPECT_EQ(actual, expected) << scene << ", " << broadPhaseName(kind) << ", L=" << levels
@@ -218,7 +218,7 @@ Soup icosphereScene(std::mt19937& rng, Scalar scale, int subdivisions, int bodie
 }
 
 TEST(BroadPhase, NamesRoundTrip) {
-  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+  for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                               BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
     BroadPhaseKind parsed{};
     ASSERT_TRUE(parseBroadPhase(broadPhaseName(kind), parsed)) << broadPhaseName(kind);
@@ -228,7 +228,7 @@ TEST(BroadPhase, NamesRoundTrip) {
   BroadPhaseKind unchanged = BroadPhaseKind::Bvh;
   EXPECT_FALSE(parseBroadPhase("octree", unchanged));
   EXPECT_EQ(unchanged, BroadPhaseKind::Bvh);
-  EXPECT_EQ(broadPhaseName(BroadPhaseKind::BoxHash), "sbhash");
+  EXPECT_EQ(broadPhaseName(BroadPhaseKind::Sbhash), "sbhash");
   EXPECT_EQ(broadPhaseName(BroadPhaseKind::SpatialHash), "spatialhash");
 }
 
@@ -299,7 +299,7 @@ TEST(BroadPhase, EveryKindStaysExactWhileBodiesDeformStepAfterStep) {
   Soup soup = icosphereScene(rng, 1, 3, 3, true);
   std::vector<std::unique_ptr<BroadPhase>> broadPhases;
   for (int levels = 1; levels <= 4; ++levels)
-    broadPhases.push_back(makeBroadPhase(BroadPhaseKind::BoxHash, {levels}));
+    broadPhases.push_back(makeBroadPhase(BroadPhaseKind::Sbhash, {levels}));
   broadPhases.push_back(makeBroadPhase(BroadPhaseKind::SpatialHash));
   broadPhases.push_back(makeBroadPhase(BroadPhaseKind::Bvh));
   for (int step = 0; step < 6; ++step) {
@@ -311,7 +311,7 @@ TEST(BroadPhase, EveryKindStaysExactWhileBodiesDeformStepAfterStep) {
                                   << firstDifference(expected, actual);
     }
     // Static surfaces (a ball and the ground) are cut into leaves on the first call only.
-    const auto& boxHash = static_cast<const BoxHashBroadPhase&>(*broadPhases[0]);
+    const auto& boxHash = static_cast<const SbhashBroadPhase&>(*broadPhases[0]);
     const auto moving = std::size_t(std::count_if(soup.surfaces.begin(), soup.surfaces.end(),
                                                   [](const auto& s) { return s.moving; }));
     EXPECT_EQ(boxHash.lastStats().rebuiltSurfaces, step == 0 ? soup.surfaces.size() : moving);
@@ -329,7 +329,7 @@ TEST(PairCache, GivesTheBroadPhasesExactPairsWhileBodiesCreepAndJump) {
   // Either way the pairs must equal brute force on the current boxes, in the same order.
   std::mt19937 rng(9);
   Soup soup = icosphereScene(rng, 1, 3, 3, true);
-  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+  for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                               BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
     Soup scene = soup;
     std::unique_ptr<BroadPhase> broadPhase = makeBroadPhase(kind);
@@ -374,14 +374,14 @@ TEST(BroadPhase, SurfacesFarApartGiveNoPairs) {
     soup.addSurface(positions, mesh.triangles, true, false);
   }
   soup.computeBoxes(Scalar(0.01));
-  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+  for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                               BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
     std::vector<TrianglePair> pairs = {{0, 1}};  // replaced, not appended to
     const auto broadPhase = makeBroadPhase(kind);
     broadPhase->findPairs(soup.input(), pairs);
     EXPECT_TRUE(pairs.empty()) << broadPhaseName(kind) << ": " << pairs.size() << " pairs";
-    if (kind == BroadPhaseKind::BoxHash) {  // the surface-box level culls both bodies outright
-      EXPECT_EQ(static_cast<BoxHashBroadPhase&>(*broadPhase).lastStats().activeSurfaces, 0u);
+    if (kind == BroadPhaseKind::Sbhash) {  // the surface-box level culls both bodies outright
+      EXPECT_EQ(static_cast<SbhashBroadPhase&>(*broadPhase).lastStats().activeSurfaces, 0u);
     }
   }
 }
@@ -394,7 +394,7 @@ TEST(BroadPhase, EmptyInputAndEmptySurfacesGiveNoPairs) {
   withEmptySurfaces.addSurface({}, {}, false, false);
   withEmptySurfaces.computeBoxes();
   for (const Soup* soup : {&empty, &withEmptySurfaces})
-    for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+    for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                                 BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
       std::vector<TrianglePair> pairs = {{0, 1}};
       makeBroadPhase(kind)->findPairs(soup->input(), pairs);
@@ -405,7 +405,7 @@ TEST(BroadPhase, EmptyInputAndEmptySurfacesGiveNoPairs) {
 TEST(BroadPhase, WarmedUpFindPairsAllocatesNothing) {
   std::mt19937 rng(13);
   const Soup soup = icosphereScene(rng, 1, 3, 3, true);
-  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+  for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                               BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
     const auto broadPhase = makeBroadPhase(kind);
     std::vector<TrianglePair> pairs;
@@ -420,9 +420,9 @@ TEST(BoxHash, CellSizeCoversEveryLeafBox) {
   std::mt19937 rng(17);
   for (int levels = 1; levels <= 4; ++levels) {
     const Soup soup = icosphereScene(rng, 1, 3, 4, true);
-    BoxHashBroadPhase broadPhase(levels);
+    SbhashBroadPhase broadPhase(levels);
     run(broadPhase, soup.input());
-    const BoxHashStats& stats = broadPhase.lastStats();
+    const SbhashStats& stats = broadPhase.lastStats();
     ASSERT_EQ(stats.leaves, broadPhase.lastLeafBoxes().size());
     ASSERT_GT(stats.leaves, 0u);
     EXPECT_GT(stats.candidateLeafPairs, 0u);

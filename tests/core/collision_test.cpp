@@ -7,8 +7,8 @@
 
 #include <cstring>
 
-#include "core/collision_detection.hpp"
-#include "core/collision_response.hpp"
+#include "core/collision/detection.hpp"
+#include "core/collision/response.hpp"
 #include "core/simulator.hpp"
 #include "tests/core/allocation_counter.hpp"
 #include "tests/core/exact_geometry.hpp"
@@ -380,7 +380,7 @@ TEST(CollisionDeterminism, EveryBroadPhaseAndThreadCountGivesTheSameBytes) {
   constexpr int kFrames = 5;
   const RunRecord reference = record(scene, BroadPhaseKind::BruteForce, 1, kFrames);
   ASSERT_FALSE(reference.contacts.empty());
-  for (BroadPhaseKind kind : {BroadPhaseKind::BoxHash, BroadPhaseKind::SpatialHash,
+  for (BroadPhaseKind kind : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                               BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce})
     for (int threads : {1, 2})
       EXPECT_TRUE(sameBytes(reference, record(scene, kind, threads, kFrames)))

@@ -1,6 +1,6 @@
 #pragma once
 /// Double-precision references for the narrow-phase tests, written independently of
-/// core/line_triangle and core/triangle_pair_test so that the two can be checked against each
+/// core/collision/line_triangle and core/collision/triangle_pair_intersection so that the two can be checked against each
 /// other:
 /// - mollerTrumbore: segment–triangle intersection (Möller & Trumbore 1997, "Fast, minimum storage
 ///   ray/triangle intersection"), closed segment and closed triangle.

@@ -1,4 +1,4 @@
-#include "core/forces.hpp"
+#include "core/dynamics/forces.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
-#include "core/integrator.hpp"
+#include "core/dynamics/integrator.hpp"
 
 #include <gtest/gtest.h>
 
-#include "core/forces.hpp"
+#include "core/dynamics/forces.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 

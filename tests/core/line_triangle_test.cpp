@@ -1,7 +1,7 @@
 // intersectSegmentTriangle: exact analytic cases on power-of-two coordinates (every operation is
 // exact in float, so results are compared with ==), then random segments against Möller–Trumbore
 // in double.
-#include "core/line_triangle.hpp"
+#include "core/collision/line_triangle.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/plane_contact.hpp"
+#include "core/collision/plane_contact.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/forces.hpp"
+#include "core/dynamics/forces.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 

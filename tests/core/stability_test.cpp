@@ -1,12 +1,12 @@
-#include "core/stability.hpp"
+#include "core/dynamics/stability.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "core/error.hpp"
-#include "core/forces.hpp"
-#include "core/integrator.hpp"
+#include "core/dynamics/forces.hpp"
+#include "core/dynamics/integrator.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 

@@ -1,9 +1,9 @@
 #pragma once
 // Small worlds for the core tests, built directly so each test controls every number.
 
-#include "core/icosphere.hpp"
-#include "core/scene_setup.hpp"
-#include "core/world.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/scene/scene_setup.hpp"
+#include "core/scene/world.hpp"
 
 namespace softbake::test {
 

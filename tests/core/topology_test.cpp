@@ -1,11 +1,11 @@
-#include "core/mesh_topology.hpp"
+#include "core/mesh/mesh_topology.hpp"
 
 #include <gtest/gtest.h>
 
 #include <numbers>
 
-#include "core/cube_sphere.hpp"
-#include "core/icosphere.hpp"
+#include "core/mesh/cube_sphere.hpp"
+#include "core/mesh/icosphere.hpp"
 
 namespace softbake {
 namespace {

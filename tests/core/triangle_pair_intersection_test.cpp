@@ -8,7 +8,7 @@
 #include <limits>
 #include <random>
 
-#include "core/triangle_pair_test.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
 #include "exact_geometry.hpp"
 
 namespace softbake {

@@ -1,4 +1,4 @@
-#include "core/weld.hpp"
+#include "core/mesh/weld.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "exporters/frame_pipeline.hpp"
+#include "output/frame_pipeline.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,13 +1,13 @@
-#include "exporters/manifest.hpp"
+#include "output/manifest.hpp"
 
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
-#include "core/icosphere.hpp"
+#include "core/mesh/icosphere.hpp"
 #include "exporters/obj_sequence_writer.hpp"
-#include "exporters/version.hpp"
+#include "output/version.hpp"
 #include "test_world.hpp"
 
 namespace softbake {

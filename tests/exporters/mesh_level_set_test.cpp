@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "core/icosphere.hpp"
+#include "core/mesh/icosphere.hpp"
 
 namespace softbake {
 namespace {

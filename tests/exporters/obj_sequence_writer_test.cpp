@@ -12,9 +12,9 @@
 #include <sstream>
 
 #include "core/error.hpp"
-#include "core/normals.hpp"
+#include "core/mesh/normals.hpp"
 #include "core/text.hpp"
-#include "exporters/version.hpp"
+#include "output/version.hpp"
 #include "test_world.hpp"
 
 namespace softbake {

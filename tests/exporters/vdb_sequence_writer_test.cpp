@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "exporters/version.hpp"
+#include "output/version.hpp"
 #include "tests/exporters/test_world.hpp"
 
 namespace softbake {

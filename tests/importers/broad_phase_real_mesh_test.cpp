@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/broad_phase.hpp"
+#include "core/collision/broad_phase.hpp"
 #include "core/simulator.hpp"
 #include "importers/mesh_import.hpp"
 #include "test_files.hpp"
@@ -51,7 +51,7 @@ TEST(BroadPhaseOnRealMeshes, EveryKindAndLevelFindsBruteForcesPairsWhileTheyDefo
   std::unique_ptr<BroadPhase> brute = makeBroadPhase(BroadPhaseKind::BruteForce);
   std::vector<std::unique_ptr<BroadPhase>> others;
   for (int levels = 1; levels <= 4; ++levels)
-    others.push_back(makeBroadPhase(BroadPhaseKind::BoxHash, {.subdivisionLevels = levels}));
+    others.push_back(makeBroadPhase(BroadPhaseKind::Sbhash, {.subdivisionLevels = levels}));
   others.push_back(makeBroadPhase(BroadPhaseKind::SpatialHash));
   others.push_back(makeBroadPhase(BroadPhaseKind::Bvh));
 

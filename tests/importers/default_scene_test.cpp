@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "core/mesh_topology.hpp"
-#include "core/weld.hpp"
+#include "core/mesh/mesh_topology.hpp"
+#include "core/mesh/weld.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
 

@@ -7,8 +7,8 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 
-#include "core/mesh_topology.hpp"
-#include "core/weld.hpp"
+#include "core/mesh/mesh_topology.hpp"
+#include "core/mesh/weld.hpp"
 #include "importers/mesh_import.hpp"
 #include "test_files.hpp"
 

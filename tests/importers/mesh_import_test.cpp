@@ -9,8 +9,8 @@
 #include <Eigen/Geometry>
 #include <set>
 
-#include "core/mesh_topology.hpp"
-#include "core/weld.hpp"
+#include "core/mesh/mesh_topology.hpp"
+#include "core/mesh/weld.hpp"
 #include "importers/mesh_import.hpp"
 #include "test_files.hpp"
 

@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include "core/icosphere.hpp"
-#include "core/mesh_topology.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/mesh/mesh_topology.hpp"
 #include "importers/mesh_transform.hpp"
 
 namespace softbake {

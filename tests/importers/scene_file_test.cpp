@@ -7,9 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
-#include "core/mesh_topology.hpp"
+#include "core/mesh/mesh_topology.hpp"
 #include "core/text.hpp"
-#include "core/weld.hpp"
+#include "core/mesh/weld.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"

@@ -17,14 +17,18 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "core/icosphere.hpp"
-#include "exporters/frame_pipeline.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "output/frame_pipeline.hpp"
+#include "tests/support/scratch_directory.hpp"
 #include "render/egl_context.hpp"
 #include "render/frame_renderer.hpp"
 #include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
 namespace {
+
+using test::readFile;
+using test::ScratchDirectory;
 
 constexpr int kWidth = 160, kHeight = 120;
 
@@ -51,29 +55,6 @@ RenderOptions smallOptions() {
   options.width = kWidth;
   options.height = kHeight;
   return options;
-}
-
-class ScratchDirectory {
- public:
-  ScratchDirectory() {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "softbake-render-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~ScratchDirectory() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-std::string readFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 struct Image {

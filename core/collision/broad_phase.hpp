@@ -1,0 +1,125 @@
+#pragma once
+/// Broad phase: which collision triangles may touch this step.
+///
+/// Every broad phase returns exactly the same thing — the eligible triangle pairs whose boxes
+/// overlap (closed boxes: touching counts), each pair once as (lower index, higher index), sorted —
+/// so the narrow phase, the response and the output are identical whichever one runs, and
+/// `BroadPhaseKind::BruteForce` is the reference the others are tested against.
+///
+/// Eligibility (pairEligible): triangles of two different surfaces, unless both are static; two
+/// triangles of one surface only when that surface self-collides and they share no vertex.
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace softbake {
+
+using Box3 = Eigen::AlignedBox<Scalar, 3>;
+
+/// A soft body or a static mesh: a contiguous range of collision triangles.
+struct CollisionSurface {
+  Index firstTriangle = 0, triangleCount = 0;
+  bool moving = true;          ///< false for static colliders: their boxes never change
+  bool selfCollision = false;  ///< test the surface's own non-adjacent triangles against each other
+};
+
+/// What a broad phase reads. Surfaces are in order and their triangle ranges tile [0, boxes).
+struct BroadPhaseInput {
+  std::span<const Box3> triangleBox;  ///< per triangle: swept over the step, inflated
+  std::span<const Triangle>
+      triangleVertices;                    ///< per triangle, in one vertex space for all surfaces
+  std::span<const Index> triangleSurface;  ///< per triangle: its surface
+  std::span<const CollisionSurface> surfaces;
+};
+
+struct TrianglePair {
+  Index first, second;  ///< first < second
+  friend bool operator==(const TrianglePair&, const TrianglePair&) = default;
+  friend auto operator<=>(const TrianglePair&, const TrianglePair&) = default;
+};
+
+/// The eligibility rule above, for triangles i ≠ j.
+bool pairEligible(const BroadPhaseInput& input, Index i, Index j);
+
+enum class BroadPhaseKind {
+  Sbhash,       ///< "sbhash": the paper's multi-level subdivided boxes (§2.1) and box hash (§2.2)
+  SpatialHash,  ///< Teschner et al. 2003 ("spatialhash")
+  Bvh,          ///< an AABB tree, refitted each step ("bvh")
+  BruteForce,   ///< every pair ("brute"): the reference
+};
+
+/// "sbhash", "spatialhash", "bvh", "brute".
+std::string_view broadPhaseName(BroadPhaseKind kind);
+/// The kind a name gives, or false for an unknown name.
+bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind);
+
+struct BroadPhaseOptions {
+  int subdivisionLevels = 3;  ///< sbhash: level L splits each surface box into 2^L per axis
+};
+
+class BroadPhase {
+ public:
+  virtual ~BroadPhase() = default;
+  /// Replaces `pairs` with this step's candidate pairs (see the file comment). Buffers inside the
+  /// broad phase and `pairs` keep their capacity, so a warmed-up step allocates nothing.
+  virtual void findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) = 0;
+  virtual BroadPhaseKind kind() const = 0;
+};
+
+std::unique_ptr<BroadPhase> makeBroadPhase(BroadPhaseKind kind,
+                                           const BroadPhaseOptions& options = {});
+
+/// What the broad phases share (core/collision/broad_phase.cpp), so each states the output contract once.
+/// For implementers of BroadPhase, not for callers.
+namespace broad_phase_detail {
+
+/// Appends (min, max) of i ≠ j when their boxes overlap and pairEligible allows them. The box
+/// test comes first: it is inline and rejects most pairs before the out-of-line rule runs.
+inline void addIfCandidate(const BroadPhaseInput& input, Index i, Index j,
+                           std::vector<TrianglePair>& out) {
+  if (!input.triangleBox[i].intersects(input.triangleBox[j]) || !pairEligible(input, i, j)) return;
+  out.push_back(i < j ? TrianglePair{i, j} : TrianglePair{j, i});
+}
+
+/// The surface a broad phase built its per-surface cache (leaves, a tree) for. A static surface's
+/// cache is kept across steps as long as the surface covers the same triangles and stays static.
+struct CachedSurface {
+  Index firstTriangle = 0, triangleCount = 0;
+  bool moving = true;
+  /// Takes over `given`; true when it differs from the surface cached so far.
+  bool adopt(const CollisionSurface& given) {
+    const bool changed = firstTriangle != given.firstTriangle ||
+                         triangleCount != given.triangleCount || moving != given.moving;
+    firstTriangle = given.firstTriangle;
+    triangleCount = given.triangleCount;
+    moving = given.moving;
+    return changed;
+  }
+};
+
+/// Sorts and drops repeats: the one output order every broad phase promises.
+void sortUnique(std::vector<TrianglePair>& pairs);
+
+/// Pairs found in parallel, one buffer per chunk of work: no two tasks share a buffer, so no lock
+/// is taken, and the result does not depend on which thread ran which chunk. Buffers keep their
+/// capacity from step to step.
+class PairBuffers {
+ public:
+  /// `chunks` empty buffers.
+  void reset(std::size_t chunks);
+  std::vector<TrianglePair>& operator[](std::size_t chunk) { return buffers_[chunk]; }
+  /// Replaces `pairs` with every buffer's pairs, sorted and unique.
+  void mergeInto(std::vector<TrianglePair>& pairs) const;
+
+ private:
+  std::vector<std::vector<TrianglePair>> buffers_;
+};
+
+}  // namespace broad_phase_detail
+
+}  // namespace softbake

@@ -1,0 +1,230 @@
+// One AABB tree per surface rather than one over the scene: a static surface's tree is built once
+// and never refitted, surface pairs that may not collide (two static ones) are never descended, and
+// each moving tree is refitted on its own, in parallel with the others.
+//
+// Rebuild rule: a tree's looseness is the summed surface area of its node boxes over the area of
+// its root box. Refitting keeps a tree correct but not tight: as triangles move away from the
+// neighbours they were grouped with at build, sibling boxes grow into each other and the sum grows
+// faster than the root. When the looseness exceeds kRebuildFactor (2) times its value at the
+// latest build, the tree is rebuilt. Dividing by the root makes the rule blind to uniform motion
+// (a body that translates, or inflates evenly, keeps a good tree), which a rule on the raw sum
+// would rebuild for nothing.
+
+#include "core/collision/bvh_broad_phase.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace softbake {
+
+namespace {
+
+/// Enough node pairs to keep any thread count busy, found by descending breadth-first.
+constexpr std::size_t kTargetTasks = 256;
+constexpr int kMaxExpansionRounds = 32;
+constexpr std::size_t kMaxChunks = 256;
+
+double area(const Box3& box) {
+  if (box.isEmpty()) return 0;
+  const Vec3d d = box.max().cast<double>() - box.min().cast<double>();
+  return 2 * (d.x() * d.y() + d.y() * d.z() + d.z() * d.x());
+}
+
+}  // namespace
+
+void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+  // Trees follow the surfaces; one whose triangles or kind changed is rebuilt.
+  trees_.resize(input.surfaces.size());
+  for (std::size_t s = 0; s < trees_.size(); ++s) {
+    Tree& tree = trees_[s];
+    if (tree.adopt(input.surfaces[s])) tree.built = false;
+  }
+  rebuilt_.assign(trees_.size(), 0);
+  tbb::parallel_for(std::size_t(0), trees_.size(), [&](std::size_t s) {
+    Tree& tree = trees_[s];
+    if (!tree.built || (tree.moving && refit(input, tree) > kRebuildFactor * tree.looseness)) {
+      build(input, tree);
+      rebuilt_[s] = 1;
+    }
+  });
+
+  tasks_.clear();
+  for (Index s = 0; s < trees_.size(); ++s) {
+    if (trees_[s].nodes.empty()) continue;
+    if (input.surfaces[s].selfCollision) tasks_.push_back({s, 0, s, 0});
+    for (Index t = s + 1; t < trees_.size(); ++t)
+      if (!trees_[t].nodes.empty() && (trees_[s].moving || trees_[t].moving))
+        tasks_.push_back({s, 0, t, 0});
+  }
+  // Expanding never reaches a leaf pair (those stay tasks), so `pairs` receives nothing here.
+  for (int round = 0; round < kMaxExpansionRounds && tasks_.size() < kTargetTasks; ++round) {
+    nextTasks_.clear();
+    bool expanded = false;
+    for (const Task& task : tasks_) {
+      if (terminal(task)) {
+        nextTasks_.push_back(task);
+      } else {
+        visit(input, task, nextTasks_, pairs);
+        expanded = true;
+      }
+    }
+    tasks_.swap(nextTasks_);
+    if (!expanded) break;
+  }
+  // The two lists trade places each round; with equal capacity, a step with a different number of
+  // rounds still finds room in whichever list it ends in.
+  const std::size_t capacity = std::max(tasks_.capacity(), nextTasks_.capacity());
+  tasks_.reserve(capacity);
+  nextTasks_.reserve(capacity);
+
+  const std::size_t chunks = std::min(kMaxChunks, tasks_.size());
+  const std::size_t perChunk = chunks ? (tasks_.size() + chunks - 1) / chunks : 0;
+  buffers_.reset(chunks);
+  if (stacks_.size() < chunks) stacks_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<Task>& stack = stacks_[chunk];
+    stack.clear();
+    const std::size_t stop = std::min(tasks_.size(), (chunk + 1) * perChunk);
+    for (std::size_t k = chunk * perChunk; k < stop; ++k) {
+      stack.push_back(tasks_[k]);
+      while (!stack.empty()) {
+        const Task task = stack.back();
+        stack.pop_back();
+        visit(input, task, stack, buffers_[chunk]);
+      }
+    }
+  });
+  buffers_.mergeInto(pairs);
+
+  stats_.nodes = 0;
+  stats_.rebuilds = 0;
+  for (std::size_t s = 0; s < trees_.size(); ++s) {
+    stats_.nodes += trees_[s].nodes.size();
+    stats_.rebuilds += std::size_t(rebuilt_[s]);
+  }
+  stats_.totalRebuilds += stats_.rebuilds;
+  stats_.tasks = tasks_.size();
+}
+
+void BvhBroadPhase::build(const BroadPhaseInput& input, Tree& tree) {
+  tree.nodes.clear();
+  tree.order.resize(tree.triangleCount);
+  tree.key.resize(tree.triangleCount);
+  for (Index k = 0; k < tree.triangleCount; ++k) tree.order[k] = tree.firstTriangle + k;
+  if (tree.triangleCount > 0) buildNode(input, tree, 0, tree.triangleCount);
+  tree.looseness = looseness(tree);
+  tree.built = true;
+}
+
+Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index begin, Index end) {
+  const Index node = Index(tree.nodes.size());
+  tree.nodes.emplace_back();  // children follow: `tree.nodes` may move, so no reference is kept
+  Box3 box, centers;
+  for (Index k = begin; k < end; ++k) {
+    const Box3& triangle = input.triangleBox[tree.order[k]];
+    box.extend(triangle);
+    centers.extend(Vec3(triangle.center()));
+  }
+  if (end - begin <= kLeafSize) {
+    tree.nodes[node].box = box;
+    tree.nodes[node].start = begin;
+    tree.nodes[node].count = end - begin;
+    return node;
+  }
+  // Median split on the longest axis of the centres: halves by count, so the depth is log2(n)
+  // whatever the shape, and every level of the tree splits work evenly for the descent.
+  int axis = 0;
+  centers.sizes().maxCoeff(&axis);
+  for (Index k = begin; k < end; ++k) {
+    const Scalar c = input.triangleBox[tree.order[k]].center()[axis];
+    tree.key[tree.order[k] - tree.firstTriangle] = std::isnan(c) ? Scalar(0) : c;  // a strict order
+  }
+  const Index mid = begin + (end - begin) / 2;
+  std::nth_element(tree.order.begin() + begin, tree.order.begin() + mid, tree.order.begin() + end,
+                   [&](Index a, Index b) {
+                     const Scalar ka = tree.key[a - tree.firstTriangle];
+                     const Scalar kb = tree.key[b - tree.firstTriangle];
+                     return ka < kb || (ka == kb && a < b);
+                   });
+  buildNode(input, tree, begin, mid);
+  const Index right = buildNode(input, tree, mid, end);
+  tree.nodes[node].box = box;
+  tree.nodes[node].right = right;
+  return node;
+}
+
+double BvhBroadPhase::refit(const BroadPhaseInput& input, Tree& tree) {
+  // Children come after their parent, so one backward sweep sees every child before its parent.
+  for (std::size_t n = tree.nodes.size(); n-- > 0;) {
+    Node& node = tree.nodes[n];
+    if (node.leaf()) {
+      node.box.setEmpty();
+      for (Index k = node.start; k < node.start + node.count; ++k)
+        node.box.extend(input.triangleBox[tree.order[k]]);
+    } else {
+      node.box = tree.nodes[n + 1].box.merged(tree.nodes[node.right].box);
+    }
+  }
+  return looseness(tree);
+}
+
+double BvhBroadPhase::looseness(const Tree& tree) {
+  if (tree.nodes.empty()) return 0;
+  const double root = area(tree.nodes[0].box);
+  if (!(root > 0)) return 0;  // a flat or empty surface: nothing to rebuild for
+  double sum = 0;
+  for (const Node& node : tree.nodes) sum += area(node.box);
+  return sum / root;
+}
+
+bool BvhBroadPhase::terminal(const Task& task) const {
+  const Node& a = trees_[task.treeA].nodes[task.nodeA];
+  const Node& b = trees_[task.treeB].nodes[task.nodeB];
+  return a.leaf() && b.leaf();
+}
+
+void BvhBroadPhase::visit(const BroadPhaseInput& input, const Task& task, std::vector<Task>& more,
+                          std::vector<TrianglePair>& out) const {
+  const Tree& ta = trees_[task.treeA];
+  const Tree& tb = trees_[task.treeB];
+  const Node& a = ta.nodes[task.nodeA];
+  const Node& b = tb.nodes[task.nodeB];
+
+  if (task.treeA == task.treeB && task.nodeA == task.nodeB) {  // a subtree against itself
+    if (a.leaf()) {
+      for (Index i = a.start; i < a.start + a.count; ++i)
+        for (Index j = i + 1; j < a.start + a.count; ++j)
+          broad_phase_detail::addIfCandidate(input, ta.order[i], ta.order[j], out);
+      return;
+    }
+    const Index left = task.nodeA + 1, right = a.right;
+    more.push_back({task.treeA, left, task.treeA, left});
+    more.push_back({task.treeA, right, task.treeA, right});
+    if (ta.nodes[left].box.intersects(ta.nodes[right].box))
+      more.push_back({task.treeA, left, task.treeA, right});
+    return;
+  }
+
+  // Callers only hand over pairs whose boxes meet, except the roots of two trees.
+  if (!a.box.intersects(b.box)) return;
+  if (a.leaf() && b.leaf()) {
+    for (Index i = a.start; i < a.start + a.count; ++i)
+      for (Index j = b.start; j < b.start + b.count; ++j)
+        broad_phase_detail::addIfCandidate(input, ta.order[i], tb.order[j], out);
+    return;
+  }
+  // Descend the larger box, which shrinks the pair's overlap fastest.
+  if (b.leaf() || (!a.leaf() && area(a.box) >= area(b.box))) {
+    for (Index child : {task.nodeA + 1, a.right})
+      if (ta.nodes[child].box.intersects(b.box))
+        more.push_back({task.treeA, child, task.treeB, task.nodeB});
+  } else {
+    for (Index child : {task.nodeB + 1, b.right})
+      if (tb.nodes[child].box.intersects(a.box))
+        more.push_back({task.treeA, task.nodeA, task.treeB, child});
+  }
+}
+
+}  // namespace softbake

@@ -1,0 +1,202 @@
+#include "core/collision/detection.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "core/scene/world.hpp"
+
+namespace softbake {
+
+namespace {
+constexpr std::size_t kPairGrain = 256;
+/// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
+constexpr std::size_t kParticleChunks = 128;
+
+TriangleCorners corners(const World& world, Index triangle) {
+  const Triangle& t = world.collision.triangleVertices[triangle];
+  return {collisionVertex(world, t[0]), collisionVertex(world, t[1]), collisionVertex(world, t[2])};
+}
+
+const Vec3& previousCollisionVertex(const World& world, Index v) {
+  return v < world.collision.particleCount
+             ? world.previousPosition[v]
+             : world.collision.staticVertex[v - world.collision.particleCount];
+}
+
+bool hasVertex(const Triangle& t, Index v) {
+  return t[0] == v || t[1] == v || t[2] == v;
+}
+
+/// The struck triangle of a particle test, computed once for all the particles tested against it.
+/// The triangle moved too during the substep: a particle's start is shifted by the triangle's own
+/// displacement (of its centroid), so the test sees the motion relative to the triangle. Without
+/// that, two bodies closing in on each other faster than the skin per substep would meet with each
+/// particle's start already behind the other's new surface, and the crossing would go unseen.
+/// Exact for a translating triangle; for a rotating or stretching one, edge contacts catch what is
+/// left.
+struct ParticleTarget {
+  Index triangle;
+  TriangleCorners now;
+  Vec3 shift;   ///< the centroid's displacement over the substep
+  Vec3 normal;  ///< unnormalised, as intersectSegmentTriangle computes it
+};
+
+ParticleTarget particleTarget(const World& world, Index triangle) {
+  const Triangle& t = world.collision.triangleVertices[triangle];
+  ParticleTarget target{triangle, corners(world, triangle), Vec3::Zero(), Vec3::Zero()};
+  Vec3 displacement = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) displacement += target.now[k] - previousCollisionVertex(world, t[k]);
+  target.shift = displacement / Scalar(3);
+  target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
+  return target;
+}
+
+/// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
+/// it): intersectSegmentTriangle's own first rejection, computed the same way, so skipping the
+/// test then changes nothing. Most candidates end here.
+bool mayCross(const World& world, Index p, const ParticleTarget& target) {
+  const Vec3 start = world.previousPosition[p] + target.shift;
+  const Scalar startSide = target.normal.dot(start - target.now[0]);
+  const Scalar endSide = target.normal.dot(world.position[p] - target.now[0]);
+  return !((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
+         startSide != endSide;
+}
+
+/// Tests particle p's motion against the target triangle.
+bool testParticle(const World& world, Index p, const ParticleTarget& target,
+                  ParticleContact& contact) {
+  const CollisionGeometry& geometry = world.collision;
+  const Index triangle = target.triangle;
+  const TriangleCorners& now = target.now;
+  const Vec3 start = world.previousPosition[p] + target.shift;
+  const Vec3& end = world.position[p];
+  if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit)) return false;
+
+  const Vec3& normal = target.normal;
+  const Scalar startSide = normal.dot(start - now[0]), endSide = normal.dot(end - now[0]);
+  Scalar orientation;
+  if (geometry.surfaceClosed[geometry.triangleSurface[triangle]]) {
+    // A closed surface has an outside: only entering counts. A particle on its way out (left
+    // inside by an earlier step) must not be pushed back in.
+    if (!(startSide >= 0 && endSide < 0)) return false;
+    orientation = 1;
+  } else {
+    orientation = startSide > 0 || (startSide == 0 && endSide < 0) ? Scalar(1) : Scalar(-1);
+  }
+  contact.particle = p;
+  contact.triangle = triangle;
+  contact.normal = orientation * normal.normalized();
+  return true;
+}
+}  // namespace
+
+const Vec3& collisionVertex(const World& world, Index v) {
+  return v < world.collision.particleCount
+             ? world.position[v]
+             : world.collision.staticVertex[v - world.collision.particleCount];
+}
+
+CollisionDetector::CollisionDetector(const CollisionSettings& settings)
+    : broadPhase_(
+          makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {
+  if (settings.pairCache) pairCache_.emplace();
+}
+
+void CollisionDetector::detect(const World& world, StageClock* clock) {
+  const CollisionGeometry& geometry = world.collision;
+  if (pairCache_)
+    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(), pairs_);
+  else
+    broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
+  if (clock) clock->lap(Stage::BroadPhase);
+
+  // Edge contacts: the multi-pass test on every candidate pair, one slot per pair.
+  pairHits_.resize(pairs_.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs_.size(), kPairGrain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                        intersectTrianglePair(corners(world, pairs_[i].first),
+                                              corners(world, pairs_[i].second), pairHits_[i]);
+                    });
+  edgeContacts_.clear();
+  for (std::size_t i = 0; i < pairs_.size(); ++i) {
+    const TrianglePairHits& hits = pairHits_[i];
+    for (int k = 0; k < hits.firstCount; ++k)
+      edgeContacts_.push_back(
+          {pairs_[i].first, pairs_[i].second, hits.firstEdges[k].edge, hits.firstEdges[k].hit});
+    for (int k = 0; k < hits.secondCount; ++k)
+      edgeContacts_.push_back(
+          {pairs_[i].second, pairs_[i].first, hits.secondEdges[k].edge, hits.secondEdges[k].hit});
+  }
+
+  // Particle contacts: every free particle of one triangle of a pair against the other triangle.
+  // A particle belongs to several triangles, so the same (particle, triangle) comes from several
+  // pairs. It is tested once, from the first triangle of the particle's incidence row that the
+  // broad phase pairs with the target: every broad phase lists exactly the eligible pairs whose
+  // boxes overlap, so that triangle is known locally, by a few box tests, with no sort of all
+  // candidates (that was a quarter of a contact-heavy step). The pairs are tested in parallel
+  // chunks, and only the few hits are sorted, so the result is the same for any thread count.
+  const BroadPhaseInput input = geometry.broadPhaseInput();
+  const auto testsFrom = [&](Index from, Index p, Index against) {
+    const Box3& target = geometry.triangleBox[against];
+    for (Index r = world.triangleRowStart[p]; r < world.triangleRowStart[p + 1]; ++r) {
+      const Index u = world.triangleRefs[r];
+      if (u == from) return true;  // paired with `against`: that is how we got here
+      // u's surface is from's, which moves, so a pair with another surface is always eligible.
+      if (geometry.triangleBox[u].intersects(target) &&
+          (geometry.triangleSurface[u] != geometry.triangleSurface[against] ||
+           pairEligible(input, u, against)))
+        return false;
+    }
+    return false;
+  };
+  const std::size_t chunks = std::min(kParticleChunks, pairs_.size());
+  const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
+  if (chunkHits_.size() < chunks) chunkHits_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<ParticleContact>& hits = chunkHits_[chunk];
+    hits.clear();
+    ParticleContact contact;
+    auto testCorners = [&](Index from, Index against) {
+      if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
+      const Triangle& struck = geometry.triangleVertices[against];
+      const ParticleTarget target = particleTarget(world, against);
+      for (Index p : geometry.triangleVertices[from])
+        if (world.inverseMass[p] != 0 && !hasVertex(struck, p) && mayCross(world, p, target) &&
+            testsFrom(from, p, against) && testParticle(world, p, target, contact))
+          hits.push_back(contact);
+    };
+    const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
+    for (std::size_t i = chunk * perChunk; i < stop; ++i) {
+      testCorners(pairs_[i].first, pairs_[i].second);
+      testCorners(pairs_[i].second, pairs_[i].first);
+    }
+  });
+  particleContacts_.clear();
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+    particleContacts_.insert(particleContacts_.end(), chunkHits_[chunk].begin(),
+                             chunkHits_[chunk].end());
+  const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
+    return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
+  };
+  // Each (particle, triangle) was tested from one pair only, so the hits are unique already.
+  std::sort(particleContacts_.begin(), particleContacts_.end(), byParticleTriangle);
+  // Hits are sorted by particle, so each particle's contacts are adjacent; within one
+  // particle, the earliest crossing comes first, ties kept in triangle order. The groups are a
+  // handful of contacts: an insertion sort, which is stable and, unlike std::stable_sort,
+  // allocates nothing.
+  for (std::size_t i = 1; i < particleContacts_.size(); ++i) {
+    const ParticleContact contact = particleContacts_[i];
+    std::size_t j = i;
+    for (; j > 0 && particleContacts_[j - 1].particle == contact.particle &&
+           particleContacts_[j - 1].hit.t > contact.hit.t;
+         --j)
+      particleContacts_[j] = particleContacts_[j - 1];
+    particleContacts_[j] = contact;
+  }
+  if (clock) clock->lap(Stage::NarrowPhase);
+}
+
+}  // namespace softbake

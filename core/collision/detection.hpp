@@ -1,0 +1,69 @@
+#pragma once
+/// Detection for one substep (Mesit & Guha §2.1–2.3): broad phase → candidate triangle pairs →
+/// the multi-pass line–triangle test on each pair (edge contacts) and on each particle's segment
+/// against the triangles its own triangles were paired with (particle contacts).
+///
+/// Every stage writes into its own slot per pair or per candidate, and the results are kept in
+/// the broad phase's sorted order, so the output is the same for any thread count and any broad
+/// phase. Buffers keep their capacity: a warmed-up substep allocates nothing.
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "core/collision/broad_phase.hpp"
+#include "core/collision/line_triangle.hpp"
+#include "core/collision/pair_cache.hpp"
+#include "core/scene/scene_setup.hpp"
+#include "core/stage_timer.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
+
+namespace softbake {
+
+struct World;
+
+/// An edge of `edgeTriangle` crossing `triangle`.
+struct EdgeContact {
+  Index edgeTriangle, triangle;
+  std::uint8_t edge;  ///< corner `edge` → corner (edge+1)%3 of edgeTriangle
+  SegmentTriangleHit hit;
+};
+
+/// A particle's motion over the substep crossing `triangle` from its front to its back: from the
+/// outside in for a closed surface, from either side for an open one.
+struct ParticleContact {
+  Index particle, triangle;
+  SegmentTriangleHit hit;
+  Vec3 normal;  ///< unit normal of the triangle, pointing to the side the particle came from
+};
+
+/// The position of collision vertex `v`: a particle, or a static mesh vertex.
+const Vec3& collisionVertex(const World& world, Index v);
+
+class CollisionDetector {
+ public:
+  explicit CollisionDetector(const CollisionSettings& settings);
+
+  /// Finds the contacts of the substep that just moved the particles from previousPosition to
+  /// position. Expects updateCollisionBoxes() to have run.
+  /// `clock`, when given, gets a BroadPhase lap after the pairs and a NarrowPhase lap at the end.
+  void detect(const World& world, StageClock* clock = nullptr);
+
+  const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
+  /// Sorted by candidate pair, then direction and edge.
+  const std::vector<EdgeContact>& edgeContacts() const { return edgeContacts_; }
+  /// Sorted by particle, then by when the particle crossed (t), then by triangle.
+  const std::vector<ParticleContact>& particleContacts() const { return particleContacts_; }
+  BroadPhaseKind broadPhase() const { return broadPhase_->kind(); }
+
+ private:
+  std::unique_ptr<BroadPhase> broadPhase_;
+  std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
+  std::vector<TrianglePair> pairs_;
+  std::vector<TrianglePairHits> pairHits_;
+  std::vector<std::vector<ParticleContact>> chunkHits_;  ///< particle hits, per chunk of pairs
+  std::vector<EdgeContact> edgeContacts_;
+  std::vector<ParticleContact> particleContacts_;
+};
+
+}  // namespace softbake

@@ -1,0 +1,57 @@
+#include "core/collision/plane_contact.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <functional>
+
+namespace softbake {
+
+namespace {
+constexpr std::size_t kParticleGrain = 2048;
+
+/// Returns true when the particle touches the plane (and, with `move`, was moved).
+bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x, Vec3& v,
+                    bool move) {
+  const Scalar endDistance = plane.normal.dot(x - plane.point);
+  if (endDistance >= skin) return false;
+  if (!move) return endDistance < 0;
+  const Scalar startDistance = plane.normal.dot(start - plane.point);
+  if (startDistance > 0 && endDistance < 0) {
+    // Crossed during the step: the intersection point of the segment, as the paper does.
+    const Scalar t = startDistance / (startDistance - endDistance);
+    x = start + t * (x - start);
+  }
+  x += (skin - plane.normal.dot(x - plane.point)) * plane.normal;
+  const Scalar normalSpeed = plane.normal.dot(v);
+  if (normalSpeed < 0) {
+    const Vec3 tangential = v - normalSpeed * plane.normal;
+    const Scalar tangentialSpeed = tangential.norm();
+    // Coulomb: the normal impulse (1+e)·|v_n| bounds how much tangential speed friction removes.
+    const Scalar slowdown = plane.friction * (1 + plane.restitution) * -normalSpeed;
+    const Scalar keep = tangentialSpeed > slowdown ? 1 - slowdown / tangentialSpeed : Scalar(0);
+    v = keep * tangential - plane.restitution * normalSpeed * plane.normal;
+  }
+  return true;
+}
+}  // namespace
+
+std::size_t resolvePlaneContacts(World& world, bool respond) {
+  if (world.planes.empty()) return 0;
+  const Scalar skin = world.settings.skin;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, world.particleCount(), kParticleGrain), std::size_t(0),
+      [&](const tbb::blocked_range<std::size_t>& range, std::size_t moved) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          if (world.inverseMass[i] == 0) continue;
+          for (const PlaneCollider& plane : world.planes)
+            moved += respondToPlane(plane, skin, world.previousPosition[i], world.position[i],
+                                    world.velocity[i], respond);
+        }
+        return moved;
+      },
+      std::plus<>());
+}
+
+}  // namespace softbake

@@ -1,0 +1,226 @@
+#include "core/collision/response.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "core/scene/world.hpp"
+
+namespace softbake {
+
+namespace {
+
+/// The surface side of a contact: up to two triangles' corners with their weights.
+struct StruckPoint {
+  std::array<Index, 6> vertex{};
+  std::array<Scalar, 6> weight{};
+  int count = 0;
+  void add(const Triangle& t, const Vec3& barycentric, Scalar share) {
+    for (int k = 0; k < 3; ++k) {
+      vertex[count] = t[k];
+      weight[count++] = share * barycentric[k];
+    }
+  }
+};
+
+Scalar inverseMass(const World& world, Index v) {
+  return v < world.collision.particleCount ? world.inverseMass[v] : Scalar(0);
+}
+
+Vec3 velocity(const World& world, Index v) {
+  return v < world.collision.particleCount ? world.velocity[v] : Vec3::Zero();
+}
+
+Vec3 unitNormal(const World& world, Index triangle) {
+  const Triangle& t = world.collision.triangleVertices[triangle];
+  const Vec3 &a = collisionVertex(world, t[0]), &b = collisionVertex(world, t[1]),
+             &c = collisionVertex(world, t[2]);
+  return (b - a).cross(c - a).normalized();
+}
+
+/// Moves particle `p` by `shift` relative to the struck point and sets their relative velocity
+/// from `normal`, splitting both between the two sides by inverse mass: the particle takes
+/// invA/k of each change and corner i of the struck side −wᵢ·invBᵢ/k, with
+/// k = invA + Σ wᵢ²·invBᵢ, which gives the whole change at the contact point and leaves the total
+/// momentum unchanged. In the paper's mode the struck side has no share (invB = 0).
+bool correct(World& world, Index p, const StruckPoint& struck, const Vec3& shift,
+             const Vec3& normal, Scalar restitution, Scalar friction, ResponseMode mode) {
+  const Scalar invA = inverseMass(world, p);
+  std::array<Scalar, 6> invB{};
+  Scalar k = invA;
+  for (int i = 0; i < struck.count; ++i) {
+    invB[i] = mode == ResponseMode::Paper ? Scalar(0) : inverseMass(world, struck.vertex[i]);
+    k += struck.weight[i] * struck.weight[i] * invB[i];
+  }
+  if (!(k > 0)) return false;
+
+  Vec3 surfaceVelocity = Vec3::Zero();
+  for (int i = 0; i < struck.count; ++i)
+    surfaceVelocity += struck.weight[i] * velocity(world, struck.vertex[i]);
+  const Vec3 relative =
+      (p < world.collision.particleCount ? world.velocity[p] : Vec3::Zero()) - surfaceVelocity;
+  const Scalar normalSpeed = relative.dot(normal);
+  Vec3 velocityChange = Vec3::Zero();
+  if (normalSpeed < 0) {
+    const Vec3 tangential = relative - normalSpeed * normal;
+    const Scalar tangentialSpeed = tangential.norm();
+    // Coulomb: the normal impulse (1+e)·|v_n| bounds how much tangential speed friction removes.
+    const Scalar slowdown = friction * (1 + restitution) * -normalSpeed;
+    const Scalar keep = tangentialSpeed > slowdown ? 1 - slowdown / tangentialSpeed : Scalar(0);
+    velocityChange = keep * tangential - restitution * normalSpeed * normal - relative;
+  }
+
+  if (invA > 0) {
+    world.position[p] += (invA / k) * shift;
+    world.velocity[p] += (invA / k) * velocityChange;
+  }
+  for (int i = 0; i < struck.count; ++i) {
+    if (invB[i] == 0) continue;
+    const Index v = struck.vertex[i];
+    const Scalar share = struck.weight[i] * invB[i] / k;
+    world.position[v] -= share * shift;
+    world.velocity[v] -= share * velocityChange;
+  }
+  return true;
+}
+
+/// Where the struck point is now: earlier responses of the substep may have moved its corners.
+Vec3 pointOn(const World& world, const StruckPoint& struck) {
+  Vec3 point = Vec3::Zero();
+  for (int i = 0; i < struck.count; ++i)
+    point += struck.weight[i] * collisionVertex(world, struck.vertex[i]);
+  return point;
+}
+
+/// The point of the line where the planes (n1, p1) and (n2, p2) meet that is closest to `x`.
+/// The normals are unit and at least 30° apart (kCornerCosine), so the system is well posed.
+Vec3 closestPointOnPlaneIntersection(const Vec3& n1, const Vec3& p1, const Vec3& n2, const Vec3& p2,
+                                     const Vec3& x) {
+  const Vec3d a = n1.cast<double>(), b = n2.cast<double>();
+  const double d1 = a.dot(p1.cast<double>()), d2 = b.dot(p2.cast<double>());
+  const double c = a.dot(b);
+  const double determinant = 1 - c * c;
+  const Vec3d onLine = ((d1 - d2 * c) * a + (d2 - d1 * c) * b) / determinant;
+  const Vec3d direction = a.cross(b).normalized();
+  const Vec3d closest = onLine + (x.cast<double>() - onLine).dot(direction) * direction;
+  return closest.cast<Scalar>();
+}
+
+}  // namespace
+
+std::string_view responseModeName(ResponseMode mode) {
+  switch (mode) {
+    case ResponseMode::TwoSided:
+      return "two-sided";
+    case ResponseMode::Paper:
+      return "paper";
+    case ResponseMode::None:
+      return "none";
+  }
+  return "two-sided";
+}
+
+bool parseResponseMode(std::string_view name, ResponseMode& mode) {
+  for (ResponseMode candidate : {ResponseMode::TwoSided, ResponseMode::Paper, ResponseMode::None})
+    if (name == responseModeName(candidate)) {
+      mode = candidate;
+      return true;
+    }
+  return false;
+}
+
+CollisionResponseStats respondToCollisions(World& world, const CollisionDetector& detector,
+                                           ResponseMode mode, std::vector<Contact>& contacts) {
+  const CollisionGeometry& geometry = world.collision;
+  const Scalar skin = world.settings.skin;
+  const bool respond = mode != ResponseMode::None;
+  CollisionResponseStats stats;
+  contacts.clear();
+
+  const std::vector<ParticleContact>& hits = detector.particleContacts();
+  for (std::size_t begin = 0; begin < hits.size();) {
+    const Index p = hits[begin].particle;
+    std::size_t end = begin + 1;
+    while (end < hits.size() && hits[end].particle == p) ++end;
+    const ParticleContact& first = hits[begin];  // the earliest crossing: closest to the particle
+    const ParticleContact* second = nullptr;
+    for (std::size_t i = begin + 1; i < end && !second; ++i)
+      if (hits[i].normal.dot(first.normal) < kCornerCosine) second = &hits[i];
+    begin = end;
+
+    const Index surfaceB = geometry.triangleSurface[first.triangle];
+    Contact contact;
+    contact.surfaceA = world.particleBody[p];
+    contact.surfaceB = surfaceB;
+    contact.triangleB = first.triangle;
+    contact.particle = p;
+    StruckPoint struck;
+    Vec3 target;
+    if (second) {
+      contact.kind = ContactKind::Corner;
+      contact.normal = (first.normal + second->normal).normalized();
+      contact.position = closestPointOnPlaneIntersection(
+          first.normal, first.hit.point, second->normal, second->hit.point, world.position[p]);
+      struck.add(geometry.triangleVertices[first.triangle], first.hit.barycentric, Scalar(0.5));
+      struck.add(geometry.triangleVertices[second->triangle], second->hit.barycentric, Scalar(0.5));
+      ++stats.cornerResponses;
+    } else {
+      contact.kind = ContactKind::ParticleTriangle;
+      contact.normal = first.normal;
+      contact.position = first.hit.point;
+      struck.add(geometry.triangleVertices[first.triangle], first.hit.barycentric, 1);
+      ++stats.particleResponses;
+    }
+    target = contact.position + skin * contact.normal;
+    contacts.push_back(contact);
+    if (respond)
+      correct(world, p, struck, target - world.position[p], contact.normal,
+              geometry.restitution[surfaceB], geometry.friction[surfaceB], mode);
+  }
+
+  for (const EdgeContact& edge : detector.edgeContacts()) {
+    const Index surfaceA = geometry.triangleSurface[edge.edgeTriangle];
+    const Index surfaceB = geometry.triangleSurface[edge.triangle];
+    Contact contact;
+    contact.kind = ContactKind::EdgeTriangle;
+    contact.position = edge.hit.point;
+    contact.normal = unitNormal(world, edge.triangle);
+    contact.surfaceA = surfaceA;
+    contact.surfaceB = surfaceB;
+    contact.triangleA = edge.edgeTriangle;
+    contact.triangleB = edge.triangle;
+    contacts.push_back(contact);
+    if (!respond || !geometry.surfaceClosed[surfaceB]) continue;
+
+    // The end of the edge behind the face of a closed surface is inside it: back out through
+    // the face's plane, lifted by the skin. Depth is measured now, after the responses before
+    // this one, so an end already pushed out by another contact is left alone.
+    const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
+    const Index ends[2] = {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]};
+    StruckPoint struck;
+    struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
+    const Vec3 normal = unitNormal(world, edge.triangle);
+    const Vec3 facePoint = pointOn(world, struck);
+    // Only an end near the face can be inside the body through it: a long edge (a big static
+    // triangle under a small body) crosses the face with its ends far outside the body, behind
+    // the face's plane but not behind the face. Near: within the face's longest side.
+    const Triangle& face = geometry.triangleVertices[edge.triangle];
+    Scalar faceSize = 0;
+    for (int k = 0; k < 3; ++k)
+      faceSize = std::max(
+          faceSize,
+          (collisionVertex(world, face[(k + 1) % 3]) - collisionVertex(world, face[k])).norm());
+    const Scalar edgeLength =
+        (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
+    const Scalar maxPush = kMaxEdgePush * edgeLength;
+    for (Index end : ends) {
+      const Scalar depth = normal.dot(collisionVertex(world, end) - facePoint);
+      if (depth >= 0 || (collisionVertex(world, end) - facePoint).norm() > faceSize) continue;
+      if (correct(world, end, struck, std::min(skin - depth, maxPush) * normal, normal,
+                  geometry.restitution[surfaceB], geometry.friction[surfaceB], mode))
+        ++stats.edgePushes;
+    }
+  }
+  return stats;
+}
+
+}  // namespace softbake

@@ -1,0 +1,24 @@
+#include "core/mesh/normals.hpp"
+
+#include <cmath>
+
+namespace softbake {
+
+void computeSmoothNormals(const World& world, std::span<const Vec3> positions, const Body& body,
+                          std::vector<Vec3f>& out) {
+  out.assign(body.particleCount, Vec3f::Zero());
+  for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
+    const Triangle& tri = world.triangles[t];
+    // The cross product's length is twice the area: larger triangles weigh more.
+    const Vec3f n = (positions[tri[1]] - positions[tri[0]])
+                        .cross(positions[tri[2]] - positions[tri[0]])
+                        .template cast<float>();
+    for (Index v : tri) out[v - body.firstParticle] += n;
+  }
+  for (Vec3f& n : out) {
+    const float length = n.norm();
+    n = length > 0 && std::isfinite(length) ? Vec3f(n / length) : Vec3f::UnitY();
+  }
+}
+
+}  // namespace softbake

@@ -1,0 +1,106 @@
+#pragma once
+/// Everything needed to start a simulation, in memory and independent of any file format.
+/// importers/ fills it from a scene file; tests and the built-in scenes fill it directly.
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/collision/broad_phase.hpp"
+
+#include "core/dynamics/material.hpp"
+#include "core/mesh/triangle_mesh.hpp"
+
+namespace softbake {
+
+/// An axis-aligned world-space box; every particle inside it at the start is pinned.
+struct PinBox {
+  Vec3f min = Vec3f::Zero();
+  Vec3f max = Vec3f::Zero();
+};
+
+/// Particles held fixed in space for the whole simulation (flags, banners).
+struct Pins {
+  std::vector<Index> particles;  ///< welded particle indices (the `v` order of the OBJ export)
+  std::vector<PinBox> boxes;
+};
+
+struct BodySetup {
+  std::string name;
+  TriangleMesh mesh;  ///< world space: the scene transform is already applied
+  Material material;
+  Scalar mass = 1;               ///< kg for the whole body, spread over particles by vertex area
+  Vec3 velocity = Vec3::Zero();  ///< initial velocity of every particle, m/s
+  Pins pins;
+  /// Collide the body with itself. Unset: on for open meshes (a flag can fold onto itself), off
+  /// for closed ones (pressure keeps them from folding, and the test costs a second pass).
+  std::optional<bool> selfCollision;
+};
+
+/// An infinite static plane; particles stay on the side its normal points to.
+struct PlaneCollider {
+  std::string name = "ground";
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitY();  ///< unit length
+  Scalar restitution = 0.2f;    ///< fraction of the normal speed kept on impact, 0..1
+  Scalar friction = 0.3f;       ///< Coulomb coefficient on the tangential speed
+};
+
+/// A static triangle mesh (the sphere of the paper's figure 6). It never moves.
+struct StaticMeshCollider {
+  std::string name;
+  TriangleMesh mesh;  ///< world space
+  Scalar restitution = 0.2f;
+  Scalar friction = 0.3f;
+};
+
+/// How the collision response of Mesit & Guha §2.4 acts.
+enum class ResponseMode {
+  TwoSided,  ///< both sides of a soft–soft contact move, weighted by mass: momentum is conserved
+  Paper,     ///< only the particle that crossed is moved, as the paper does
+  None,      ///< detection only: contacts are found and recorded, nothing moves (figure 5b)
+};
+
+/// "two-sided", "paper", "none".
+std::string_view responseModeName(ResponseMode mode);
+/// The mode a name gives, or false for an unknown name.
+bool parseResponseMode(std::string_view name, ResponseMode& mode);
+
+struct CollisionSettings {
+  /// The fastest correct broad phase, measured (bench/results/README.md): the AABB tree. The
+  /// paper's subdivided boxes and box hash remain one key away ("sbhash"), with identical results.
+  BroadPhaseKind broadPhase = BroadPhaseKind::Bvh;
+  int subdivisionLevels = 3;  ///< level L of the subdivided boxes (sbhash): 2^L leaves per axis
+  ResponseMode response = ResponseMode::TwoSided;
+  Scalar restitution = 0.2f;  ///< between soft bodies; static colliders carry their own
+  Scalar friction = 0.3f;
+  /// Reuse the broad phase's pairs while every triangle stays within a margin of where it was
+  /// (core/pair_cache.hpp): identical results, the broad phase once every few dozen steps. Off
+  /// runs the broad phase every step, to compare broad phases themselves.
+  bool pairCache = true;
+};
+
+struct SimulationSettings {
+  double fps = 24;
+  int frames = 240;
+  /// Substeps per frame; 0 chooses them from the explicit-Euler stability bound.
+  int substeps = 0;
+  Vec3 gravity = Vec3(0, Scalar(-9.81), 0);  ///< m/s²
+  /// Speed above which a particle is taken to have blown up, in scene units per second.
+  Scalar maxSpeed = 1000;
+  /// Distance particles are left outside a surface after a collision response, scene units.
+  Scalar skin = Scalar(1e-3);
+  std::string units = "m";  ///< recorded in the outputs; the simulation is unit-agnostic
+  CollisionSettings collisions;
+};
+
+struct SceneSetup {
+  std::string name = "scene";
+  SimulationSettings settings;
+  std::vector<BodySetup> bodies;
+  std::vector<PlaneCollider> planes;
+  std::vector<StaticMeshCollider> staticMeshes;
+};
+
+}  // namespace softbake

@@ -1,9 +1,0 @@
-#include "exporters/version.hpp"
-
-namespace softbake {
-
-const char* softbakeVersion() {
-  return SOFTBAKE_VERSION;
-}
-
-}  // namespace softbake

@@ -1,0 +1,9 @@
+#include "output/version.hpp"
+
+namespace softbake {
+
+const char* softbakeVersion() {
+  return SOFTBAKE_VERSION;
+}
+
+}  // namespace softbake
