@@ -93,8 +93,10 @@ struct BulletWorld {
 int run(int argc, char** argv) {
   const Arguments arguments = parse(argc, argv);
   const SceneFile scene = loadSceneInput(arguments.scene);
-  const Simulator reference(buildWorld(scene.setup));  // for the time step and the welded meshes
-  const World& w = reference.world();
+  // For the time step and the welded meshes.
+  const Simulator reference(buildSceneTopology(scene.setup));
+  const SceneTopology& w = reference.topology();
+  const SimulationState& initial = reference.state();
   const double dt = reference.substeps().timeStep;
 
   BulletWorld bullet;
@@ -114,7 +116,7 @@ int run(int argc, char** argv) {
   for (const Body& body : w.bodies) {
     std::vector<btScalar> vertices;
     for (Index i = 0; i < body.particleCount; ++i) {
-      const Vec3& p = w.position[body.firstParticle + i];
+      const Vec3& p = initial.position[body.firstParticle + i];
       vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
     }
     std::vector<int> triangles;
@@ -126,7 +128,7 @@ int run(int argc, char** argv) {
     for (Index i = 0; i < body.particleCount; ++i) {
       const Index p = body.firstParticle + i;
       soft->setMass(int(i), w.inverseMass[p] > 0 ? btScalar(1 / w.inverseMass[p]) : 0);
-      const Vec3& v = w.velocity[p];
+      const Vec3& v = initial.velocity[p];
       soft->m_nodes[int(i)].m_v = btVector3(v.x(), v.y(), v.z());
     }
     soft->m_materials[0]->m_kLST = 0.9f;

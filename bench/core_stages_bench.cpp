@@ -18,14 +18,15 @@
 #include <vector>
 
 #include "bench/scene_sizes.hpp"
-#include "core/error.hpp"
+#include "core/collision/plane_contact.hpp"
 #include "core/dynamics/forces.hpp"
-#include "core/mesh/icosphere.hpp"
 #include "core/dynamics/integrator.hpp"
 #include "core/dynamics/material.hpp"
-#include "core/collision/plane_contact.hpp"
+#include "core/error.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 #include "core/simulator.hpp"
-#include "core/scene/world.hpp"
 
 namespace softbake {
 namespace {
@@ -67,126 +68,125 @@ SceneSetup ballsScene(const SceneSize& size) {
 const Simulator& preparedSimulator(int faces) {
   static std::map<int, Simulator> cache;
   if (auto it = cache.find(faces); it != cache.end()) return it->second;
-  Simulator simulator(buildWorld(ballsScene(bench::sceneSize(faces))));
-  if (simulator.world().triangles.size() != std::size_t(faces))
-    throw std::runtime_error("scene has " + std::to_string(simulator.world().triangles.size()) +
+  Simulator simulator(buildSceneTopology(ballsScene(bench::sceneSize(faces))));
+  if (simulator.topology().triangles.size() != std::size_t(faces))
+    throw std::runtime_error("scene has " + std::to_string(simulator.topology().triangles.size()) +
                              " faces, not " + std::to_string(faces));
   for (int s = 0; s < kWarmUpSubsteps; ++s) simulator.step(1);
   return cache.emplace(faces, std::move(simulator)).first->second;
 }
 
-void setCounters(benchmark::State& state, const World& world) {
-  state.SetItemsProcessed(state.iterations() * std::int64_t(world.triangles.size()));
-  state.counters["faces"] = double(world.triangles.size());
-  state.counters["particles"] = double(world.particleCount());
-  state.counters["springs"] = double(world.springs.size());
+void setCounters(benchmark::State& state, const SceneTopology& topology) {
+  state.SetItemsProcessed(state.iterations() * std::int64_t(topology.triangles.size()));
+  state.counters["faces"] = double(topology.triangles.size());
+  state.counters["particles"] = double(topology.particleCount());
+  state.counters["springs"] = double(topology.springs.size());
   state.counters["contacts"] = 0;  // every run needs every counter for the CSV reporter
 }
 
 /// Copies the prepared simulator of the benchmark's size under a TBB limit of range(1) threads;
-/// the limit lasts as long as this object.
+/// the limit lasts as long as this object. The stage benchmarks drive a copy of its state and
+/// buffers by hand; BM_Step runs the copied simulator.
 struct StageRun {
   explicit StageRun(const benchmark::State& state)
       : threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1))),
-        simulator(World(preparedSimulator(int(state.range(0))).world())) {}
-  World& world() { return simulator.world(); }
+        simulator(preparedSimulator(int(state.range(0))).sharedTopology(),
+                  preparedSimulator(int(state.range(0))).state()),
+        topology(simulator.topology()),
+        particles(simulator.state()),
+        forces(topology),
+        substepStart(particles.position) {}
+  /// The forces stage, in the simulator's order.
+  void computeForces() {
+    computeSpringForces(topology, particles, forces);
+    computeVolumes(topology, particles, forces);
+    computePressureForces(topology, particles, forces);
+  }
 
   tbb::global_control threads;
   Simulator simulator;
-};
-
-/// The particle state integrate() and resolvePlaneContacts() change.
-struct ParticleState {
-  std::vector<Vec3> position, previousPosition, velocity;
-  explicit ParticleState(const World& world)
-      : position(world.position),
-        previousPosition(world.previousPosition),
-        velocity(world.velocity) {}
-  void restore(World& world) const {
-    world.position = position;
-    world.previousPosition = previousPosition;
-    world.velocity = velocity;
-  }
+  const SceneTopology& topology;
+  SimulationState particles;
+  ForceBuffers forces;
+  std::vector<Vec3> substepStart;
 };
 
 void BM_SpringForces(benchmark::State& state) {
   StageRun run(state);
   for (auto _ : state) {
-    computeSpringForces(run.world());
+    computeSpringForces(run.topology, run.particles, run.forces);
     benchmark::ClobberMemory();
   }
-  setCounters(state, run.world());
+  setCounters(state, run.topology);
 }
 
 void BM_Volumes(benchmark::State& state) {
   StageRun run(state);
   for (auto _ : state) {
-    computeVolumes(run.world());
-    benchmark::DoNotOptimize(run.world().bodyVolume.data());
+    computeVolumes(run.topology, run.particles, run.forces);
+    benchmark::DoNotOptimize(run.forces.bodyVolume.data());
     benchmark::ClobberMemory();
   }
-  setCounters(state, run.world());
+  setCounters(state, run.topology);
 }
 
 void BM_PressureForces(benchmark::State& state) {
   StageRun run(state);
-  computeVolumes(run.world());
+  computeVolumes(run.topology, run.particles, run.forces);
   for (auto _ : state) {
-    computePressureForces(run.world());
+    computePressureForces(run.topology, run.particles, run.forces);
     benchmark::ClobberMemory();
   }
-  setCounters(state, run.world());
+  setCounters(state, run.topology);
 }
 
 void BM_Integrate(benchmark::State& state) {
   StageRun run(state);
-  World& world = run.world();
   const Scalar dt = Scalar(run.simulator.substeps().timeStep);
-  computeSpringForces(world);
-  computeVolumes(world);
-  computePressureForces(world);
-  const ParticleState start(world);
+  run.computeForces();
+  const SimulationState start = run.particles;
   int sinceRestore = 0;
   for (auto _ : state) {
     if (++sinceRestore == kRestorePeriod) {
       state.PauseTiming();
-      start.restore(world);
+      run.particles = start;
       sinceRestore = 0;
       state.ResumeTiming();
     }
-    benchmark::DoNotOptimize(integrate(world, dt));
+    benchmark::DoNotOptimize(
+        integrate(run.topology, run.forces, dt, run.particles, run.substepStart));
     benchmark::ClobberMemory();
   }
-  setCounters(state, world);
+  setCounters(state, run.topology);
 }
 
 /// Every call sees the state integrate() leaves: the particles in contact are put back before
 /// each call (timed; they are ~2% of the particles), the others were never moved.
 void BM_PlaneContacts(benchmark::State& state) {
   StageRun run(state);
-  World& world = run.world();
-  computeSpringForces(world);
-  computeVolumes(world);
-  computePressureForces(world);
-  integrate(world, Scalar(run.simulator.substeps().timeStep));
-  const ParticleState start(world);
+  const SceneTopology& topology = run.topology;
+  SimulationState& particles = run.particles;
+  run.computeForces();
+  integrate(topology, run.forces, Scalar(run.simulator.substeps().timeStep), particles,
+            run.substepStart);
+  const SimulationState start = particles;
   std::vector<Index> touched;
-  for (Index i = 0; i < world.particleCount(); ++i)
-    for (const PlaneCollider& plane : world.planes)
-      if (plane.normal.dot(world.position[i] - plane.point) < world.settings.skin) {
+  for (Index i = 0; i < particles.particleCount(); ++i)
+    for (const PlaneCollider& plane : topology.planes)
+      if (plane.normal.dot(particles.position[i] - plane.point) < topology.settings.skin) {
         touched.push_back(i);
         break;
       }
   std::size_t contacts = 0;
   for (auto _ : state) {
     for (Index i : touched) {
-      world.position[i] = start.position[i];
-      world.velocity[i] = start.velocity[i];
+      particles.position[i] = start.position[i];
+      particles.velocity[i] = start.velocity[i];
     }
-    contacts += resolvePlaneContacts(world);
+    contacts += resolvePlaneContacts(topology, run.substepStart, particles);
     benchmark::ClobberMemory();
   }
-  setCounters(state, world);
+  setCounters(state, topology);
   state.counters["contacts"] =
       state.iterations() ? double(contacts) / double(state.iterations()) : 0.0;
 }
@@ -198,7 +198,7 @@ void BM_Step(benchmark::State& state) {
   } catch (const Error& error) {
     state.SkipWithError(error.what());
   }
-  setCounters(state, run.world());
+  setCounters(state, run.topology);
 }
 
 void sizesAndThreads(benchmark::internal::Benchmark* b) {

@@ -7,8 +7,8 @@
 ///            Eigen generates for .col(i) differs from `packed`
 ///   split    three std::vector<float> x, y, z per quantity (structure of arrays)
 ///
-/// The springs and the incidence rows come from buildWorld() of icosphere scenes of 10k and ~1M
-/// faces. Single-threaded, float. Before timing, all three layouts run the same steps and must
+/// The springs and the incidence rows come from buildSceneTopology() of icosphere scenes of 10k and
+/// ~1M faces. Single-threaded, float. Before timing, all three layouts run the same steps and must
 /// agree to a tiny tolerance; the program stops otherwise.
 
 #include <benchmark/benchmark.h>
@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "core/mesh/icosphere.hpp"
 #include "core/dynamics/material.hpp"
 #include "core/dynamics/stability.hpp"
-#include "core/scene/world.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/scene/scene_topology.hpp"
 
 namespace softbake {
 namespace {
@@ -62,7 +62,7 @@ Case makeCase(std::string name, int subdivisions, int balls) {
     body.material = *findMaterialPreset("rubber");
     scene.bodies.push_back(std::move(body));
   }
-  const World world = buildWorld(scene);
+  const SceneTopology world = buildSceneTopology(scene);
   Case c;
   c.name = std::move(name);
   c.faces = world.triangles.size();
@@ -80,7 +80,7 @@ Case makeCase(std::string name, int subdivisions, int balls) {
     random = random * 1664525u + 1013904223u;  // fixed LCG: the same start on every run
     return (float(random >> 8) / float(1 << 24) - 0.5f) * 0.02f * edge;
   };
-  for (const Vec3& p : world.position) {
+  for (const Vec3& p : world.restPosition) {
     const Vector3f q = p.cast<float>();
     c.startPosition.push_back(q + Vector3f(jitter(), jitter(), jitter()));
     c.startVelocity.push_back(Vector3f::Zero());

@@ -16,29 +16,29 @@
 #include <string>
 
 #include "core/mesh/cube_sphere.hpp"
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 
 namespace softbake {
 namespace {
 
-World ballWorld(std::size_t faces) {
+SceneTopology ballTopology(std::size_t faces) {
   SceneSetup setup;
   setup.name = "bench";
   BodySetup body;
   body.name = "ball";
   body.mesh = makeCubeSphere(cubeSphereDivisions(faces), 1.0f);
   setup.bodies.push_back(std::move(body));
-  return buildWorld(setup);
+  return buildSceneTopology(setup);
 }
 
 void VdbExportFrame(benchmark::State& state) {
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                     std::size_t(state.range(1)));
-  static std::map<std::size_t, World> worlds;
+  static std::map<std::size_t, SceneTopology> topologies;
   const std::size_t faces = std::size_t(state.range(0));
-  if (!worlds.count(faces)) worlds.emplace(faces, ballWorld(faces));
-  const World& world = worlds.at(faces);
+  if (!topologies.count(faces)) topologies.emplace(faces, ballTopology(faces));
+  const SceneTopology& topology = topologies.at(faces);
   std::string directory =
       (std::filesystem::temp_directory_path() / "softbake-vdb-bench-XXXXXX").string();
   if (!::mkdtemp(directory.data())) throw std::runtime_error("mkdtemp failed");
@@ -49,15 +49,15 @@ void VdbExportFrame(benchmark::State& state) {
   options.compression = state.range(3) == 0   ? VdbOptions::Compression::Zip
                         : state.range(3) == 1 ? VdbOptions::Compression::Blosc
                                               : VdbOptions::Compression::None;
-  VdbSequenceWriter writer(world, directory, "bench", options);
+  VdbSequenceWriter writer(topology, directory, "bench", options);
   Frame frame;
-  frame.positions = world.position;
-  frame.velocities.assign(world.particleCount(), Vec3(0, -1, 0));
+  frame.positions = topology.restPosition;
+  frame.velocities.assign(topology.particleCount(), Vec3(0, -1, 0));
   for (auto _ : state) {
     writer.write(frame);
     ++frame.number;
   }
-  state.counters["faces"] = double(world.triangles.size());
+  state.counters["faces"] = double(topology.triangles.size());
   state.counters["MiB/frame"] =
       double(writer.bytesWritten()) / double(state.iterations()) / double(1 << 20);
   std::filesystem::remove_all(directory);

@@ -14,9 +14,9 @@
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
-#include "output/atomic_file.hpp"
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
+#include "output/atomic_file.hpp"
 #include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
@@ -81,6 +81,129 @@ class ScratchFolder {
   fs::path path_;
 };
 
+/// What the measured loop records per step; summarised after, so the loop only records.
+struct StepRecord {
+  std::vector<StageTimes> times;
+  std::vector<std::uint32_t> pairs, contacts;
+  double simulationSeconds = 0;
+};
+
+/// The OBJ, VDB and PNG writers, each timed on the bench thread.
+std::vector<ExportTiming> openExports(const Simulator& simulator, const fs::path& folder,
+                                      const std::string& name) {
+  std::vector<ExportTiming> exports;
+  exports.push_back(
+      {std::make_unique<ObjSequenceWriter>(simulator.sharedTopology(), folder, name)});
+  VdbOptions vdb;
+  vdb.fps = simulator.topology().settings.fps;
+  exports.push_back({std::make_unique<VdbSequenceWriter>(simulator.topology(), folder, name, vdb)});
+  exports.push_back({std::make_unique<PngSequenceRenderer>(simulator.sharedTopology(), folder, name,
+                                                           RenderOptions{})});
+  return exports;
+}
+
+/// Runs `steps` measured substeps; after each frame's last substep, every export writes it.
+StepRecord runMeasuredSteps(Simulator& simulator, std::size_t steps,
+                            std::vector<ExportTiming>& exports) {
+  const int substeps = simulator.substeps().substeps;
+  const double fps = simulator.topology().settings.fps;
+  StepRecord record;
+  record.times.resize(steps);
+  record.pairs.resize(steps);
+  record.contacts.resize(steps);
+  Frame frame;
+  simulator.measureStages(true);
+  for (std::size_t s = 0; s < steps; ++s) {
+    const int frameNumber = 2 + int(s / std::size_t(substeps));
+    const Clock::time_point start = Clock::now();
+    simulator.step(frameNumber);
+    record.simulationSeconds += secondsSince(start);
+    record.times[s] = simulator.lastStepTimes();
+    record.pairs[s] = std::uint32_t(simulator.lastStepCandidatePairs());
+    record.contacts[s] = std::uint32_t(simulator.contacts().size());
+    if (!exports.empty() && (s + 1) % std::size_t(substeps) == 0) {
+      frame.number = frameNumber;
+      frame.time = (frameNumber - 1) / fps;
+      frame.positions = simulator.state().position;
+      frame.velocities = simulator.state().velocity;
+      frame.contacts = simulator.contacts();
+      for (ExportTiming& e : exports) {
+        const Clock::time_point exportStart = Clock::now();
+        e.sink->write(frame);
+        e.seconds += secondsSince(exportStart);
+        ++e.frames;
+      }
+    }
+  }
+  // A writer may still be finishing its last frame (the PNG encoder overlaps the next render).
+  for (ExportTiming& e : exports) {
+    const Clock::time_point finishStart = Clock::now();
+    e.sink->finish();
+    e.seconds += secondsSince(finishStart);
+  }
+  return record;
+}
+
+/// Per stage: median and p95 over the steps, and the share of the total. Returns the whole
+/// step's spread.
+Spread printStages(const StepRecord& record) {
+  const std::size_t steps = record.times.size();
+  std::printf("  %-13s %10s %10s %7s\n", "stage", "median ms", "p95 ms", "share");
+  std::int64_t allStages = 0;
+  for (const StageTimes& t : record.times) allStages += t.total();
+  std::vector<double> values(steps);
+  for (int stage = 0; stage < kStageCount; ++stage) {
+    std::int64_t sum = 0;
+    for (std::size_t s = 0; s < steps; ++s) {
+      values[s] = milliseconds(record.times[s].nanoseconds[stage]);
+      sum += record.times[s].nanoseconds[stage];
+    }
+    const Spread stageSpread = spread(values);
+    std::printf("  %-13s %10.4f %10.4f %6.1f%%\n", stageName(Stage(stage)), stageSpread.median,
+                stageSpread.p95, allStages > 0 ? 100.0 * double(sum) / double(allStages) : 0.0);
+  }
+  for (std::size_t s = 0; s < steps; ++s) values[s] = milliseconds(record.times[s].total());
+  const Spread step = spread(values);
+  std::printf("  %-13s %10.4f %10.4f\n", "step", step.median, step.p95);
+  return step;
+}
+
+/// Contacts and pairs per step, and each export's cost per frame. Returns the contacts per step.
+double printContactsAndExports(const StepRecord& record, const std::vector<ExportTiming>& exports) {
+  const std::size_t steps = record.times.size();
+  double contactSum = 0, pairSum = 0;
+  std::uint32_t contactMax = 0;
+  for (std::size_t s = 0; s < steps; ++s) {
+    contactSum += record.contacts[s];
+    pairSum += record.pairs[s];
+    contactMax = std::max(contactMax, record.contacts[s]);
+  }
+  const double contactsPerStep = contactSum / double(steps);
+  std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
+              contactsPerStep, contactMax, pairSum / double(steps));
+  for (const ExportTiming& e : exports) {
+    const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
+    std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
+                e.frames);
+    if (std::string(e.sink->name()) == "obj" && e.seconds > 0)
+      std::printf(", %.0f MB/s", double(e.sink->bytesWritten()) / e.seconds / 1e6);
+    std::printf("\n");
+  }
+  return contactsPerStep;
+}
+
+/// One CSV row per step.
+void appendCsvRows(std::string& csv, const std::string& broadPhase, const StepRecord& record,
+                   int substeps) {
+  for (std::size_t s = 0; s < record.times.size(); ++s) {
+    const StageTimes& t = record.times[s];
+    csv += cat(broadPhase, ",", s + 1, ",", 2 + s / std::size_t(substeps));
+    for (int stage = 0; stage < kStageCount; ++stage)
+      csv += cat(",", milliseconds(t.nanoseconds[stage]));
+    csv += cat(",", milliseconds(t.total()), ",", record.pairs[s], ",", record.contacts[s], "\n");
+  }
+}
+
 int bench(const BenchOptions& options) {
   std::optional<tbb::global_control> threadLimit;
   if (options.threads > 0)
@@ -109,10 +232,10 @@ int bench(const BenchOptions& options) {
     applySimulationOverrides(overrides, settings);
     const std::string broadPhase(broadPhaseName(settings.collisions.broadPhase));
 
-    Simulator simulator(buildWorld(scene.setup));
-    const World& world = simulator.world();
+    Simulator simulator(buildSceneTopology(scene.setup));
+    const SceneTopology& topology = simulator.topology();
     std::size_t faces = 0;
-    for (const Body& body : world.bodies) faces += body.triangleCount;
+    for (const Body& body : topology.bodies) faces += body.triangleCount;
     const int substeps = simulator.substeps().substeps;
     const long requested = options.steps ? *options.steps : long(settings.frames - 1) * substeps;
     if (requested < 1) throw Error("nothing to run: give --steps or at least 2 --frames");
@@ -120,98 +243,20 @@ int bench(const BenchOptions& options) {
     std::printf(
         "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
         "%s broad phase%s, %d threads%s\n",
-        scene.setup.name.c_str(), faces, world.bodies.size(), world.particleCount(), steps,
+        scene.setup.name.c_str(), faces, topology.bodies.size(), topology.particleCount(), steps,
         simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(),
         settings.collisions.pairCache ? " with the pair cache" : " every step", threads,
         options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "");
     std::fflush(stdout);
 
     std::vector<ExportTiming> exports;
-    if (options.withExports) {
-      const std::string& name = scene.setup.name;
-      exports.push_back({std::make_unique<ObjSequenceWriter>(world, exportFolder, name)});
-      VdbOptions vdb;
-      vdb.fps = settings.fps;
-      exports.push_back({std::make_unique<VdbSequenceWriter>(world, exportFolder, name, vdb)});
-      exports.push_back(
-          {std::make_unique<PngSequenceRenderer>(world, exportFolder, name, RenderOptions{})});
-    }
-    Frame frame;
+    if (options.withExports) exports = openExports(simulator, exportFolder, scene.setup.name);
     for (long s = 0; s < options.warmupSteps; ++s) simulator.step(1);
+    const StepRecord record = runMeasuredSteps(simulator, steps, exports);
 
-    // Everything per step is stored first and summarised after, so the loop only records.
-    std::vector<StageTimes> times(steps);
-    std::vector<std::uint32_t> pairs(steps), contacts(steps);
-    simulator.measureStages(true);
-    double simulationSeconds = 0;
-    for (std::size_t s = 0; s < steps; ++s) {
-      const int frameNumber = 2 + int(s / std::size_t(substeps));
-      const Clock::time_point start = Clock::now();
-      simulator.step(frameNumber);
-      simulationSeconds += secondsSince(start);
-      times[s] = simulator.lastStepTimes();
-      pairs[s] = std::uint32_t(simulator.lastStepCandidatePairs());
-      contacts[s] = std::uint32_t(simulator.contacts().size());
-      if (!exports.empty() && (s + 1) % std::size_t(substeps) == 0) {
-        frame.number = frameNumber;
-        frame.time = (frameNumber - 1) / settings.fps;
-        frame.positions = world.position;
-        frame.velocities = world.velocity;
-        frame.contacts = simulator.contacts();
-        for (ExportTiming& e : exports) {
-          const Clock::time_point exportStart = Clock::now();
-          e.sink->write(frame);
-          e.seconds += secondsSince(exportStart);
-          ++e.frames;
-        }
-      }
-    }
-    // A writer may still be finishing its last frame (the PNG encoder overlaps the next render).
-    for (ExportTiming& e : exports) {
-      const Clock::time_point finishStart = Clock::now();
-      e.sink->finish();
-      e.seconds += secondsSince(finishStart);
-    }
-
-    // Per stage: median and p95 over the steps, and the share of the total.
-    std::printf("  %-13s %10s %10s %7s\n", "stage", "median ms", "p95 ms", "share");
-    std::int64_t allStages = 0;
-    for (const StageTimes& t : times) allStages += t.total();
-    std::vector<double> values(steps);
-    for (int stage = 0; stage < kStageCount; ++stage) {
-      std::int64_t sum = 0;
-      for (std::size_t s = 0; s < steps; ++s) {
-        values[s] = milliseconds(times[s].nanoseconds[stage]);
-        sum += times[s].nanoseconds[stage];
-      }
-      const Spread stageSpread = spread(values);
-      std::printf("  %-13s %10.4f %10.4f %6.1f%%\n", stageName(Stage(stage)), stageSpread.median,
-                  stageSpread.p95, allStages > 0 ? 100.0 * double(sum) / double(allStages) : 0.0);
-    }
-    for (std::size_t s = 0; s < steps; ++s) values[s] = milliseconds(times[s].total());
-    const Spread step = spread(values);
-    std::printf("  %-13s %10.4f %10.4f\n", "step", step.median, step.p95);
-
-    double contactSum = 0, pairSum = 0;
-    std::uint32_t contactMax = 0;
-    for (std::size_t s = 0; s < steps; ++s) {
-      contactSum += contacts[s];
-      pairSum += pairs[s];
-      contactMax = std::max(contactMax, contacts[s]);
-    }
-    const double contactsPerStep = contactSum / double(steps);
-    std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
-                contactsPerStep, contactMax, pairSum / double(steps));
-    for (const ExportTiming& e : exports) {
-      const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
-      std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
-                  e.frames);
-      if (std::string(e.sink->name()) == "obj" && e.seconds > 0)
-        std::printf(", %.0f MB/s", double(e.sink->bytesWritten()) / e.seconds / 1e6);
-      std::printf("\n");
-    }
-
-    const double stepsPerSecond = double(steps) / simulationSeconds;
+    const Spread step = printStages(record);
+    const double contactsPerStep = printContactsAndExports(record, exports);
+    const double stepsPerSecond = double(steps) / record.simulationSeconds;
     const double peak = peakResidentMiB();
     std::printf(
         "scene=%s faces=%zu broadphase=%s pair_cache=%d threads=%d warmup=%ld steps=%zu "
@@ -222,15 +267,7 @@ int bench(const BenchOptions& options) {
         threads, options.warmupSteps, steps, stepsPerSecond, step.median, step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces));
     std::fflush(stdout);
-
-    if (options.csv)
-      for (std::size_t s = 0; s < steps; ++s) {
-        const StageTimes& t = times[s];
-        csv += cat(broadPhase, ",", s + 1, ",", 2 + s / std::size_t(substeps));
-        for (int stage = 0; stage < kStageCount; ++stage)
-          csv += cat(",", milliseconds(t.nanoseconds[stage]));
-        csv += cat(",", milliseconds(t.total()), ",", pairs[s], ",", contacts[s], "\n");
-      }
+    if (options.csv) appendCsvRows(csv, broadPhase, record, substeps);
   }
   if (options.csv) {
     writeFileAtomically(*options.csv, csv);

@@ -6,6 +6,8 @@
 #include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/run_command.hpp"
+#include "core/collision/broad_phase.hpp"
+#include "core/scene/scene_setup.hpp"
 
 #ifndef SOFTBAKE_VERSION
 #define SOFTBAKE_VERSION "unknown"
@@ -25,17 +27,15 @@ std::string checkSubsteps(const std::string& value) {
   return "expected 'auto' or a whole number >= 1, got '" + value + "'";
 }
 
-}  // namespace
+/// `softbake run`: the options it fills, and the --render/--no-render pair it resolves after
+/// parsing.
+struct RunCommandLine {
+  softbake::RunOptions options;
+  bool renderOn = false, renderOff = false;
+};
 
-int main(int argc, char** argv) {
-  CLI::App app{"softbake " SOFTBAKE_VERSION
-               " - offline soft-body simulation (Matyka-Ollila pressure bodies, Mesit-Guha "
-               "collisions) with OBJ sequence output",
-               "softbake"};
-  app.set_version_flag("--version", std::string("softbake ") + SOFTBAKE_VERSION);
-  app.require_subcommand(1);
-
-  softbake::RunOptions run;
+CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
+  softbake::RunOptions& run = line.options;
   CLI::App* runApp = app.add_subcommand(
       "run",
       "Simulate a scene and write its frames. INPUT is a scene .json, a mesh file (any "
@@ -54,25 +54,24 @@ int main(int argc, char** argv) {
       ->add_option("--broadphase", run.broadPhase,
                    "collision broad phase: sbhash (the paper's subdivided boxes and box hash), "
                    "spatialhash, bvh or brute")
-      ->check(CLI::IsMember({"sbhash", "spatialhash", "bvh", "brute"}));
+      ->check(CLI::IsMember(softbake::broadPhaseNames()));
   runApp->add_option("--levels", run.levels, "subdivision level of the sbhash boxes")
       ->check(CLI::Range(0, 8));
   runApp
       ->add_option("--response", run.response,
                    "collision response: two-sided (momentum-conserving), paper (only the "
                    "particle moves) or none")
-      ->check(CLI::IsMember({"two-sided", "paper", "none"}));
+      ->check(CLI::IsMember(softbake::responseModeNames()));
   runApp->add_flag("--no-pair-cache", run.noPairCache,
                    "run the broad phase every substep instead of reusing its pairs (same result)");
   runApp->add_flag("--no-response", run.noResponse,
                    "detect contacts but do not respond (the paper's figure 5b)");
   runApp->add_flag("--contacts", run.contacts,
                    "write each frame's contacts to OUT/contacts/<scene>_0001.json ...");
-  bool renderOn = false, renderOff = false;
   CLI::Option* renderFlag = runApp->add_flag(
-      "--render", renderOn,
+      "--render", line.renderOn,
       "render PNG frames with EGL off screen (on by default for the built-in scene)");
-  runApp->add_flag("--no-render", renderOff, "write no PNG frames")->excludes(renderFlag);
+  runApp->add_flag("--no-render", line.renderOff, "write no PNG frames")->excludes(renderFlag);
   runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
   runApp->add_flag("--no-contact-spheres", run.noContactSpheres,
                    "render without the grey spheres at the contact points");
@@ -92,7 +91,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
 
-  softbake::CompareOptions compare;
+  return runApp;
+}
+
+CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   CLI::App* compareApp = app.add_subcommand(
       "compare",
       "Compare two rendered frames (or two folders of frames) for image regression. Exit 0 "
@@ -113,7 +115,10 @@ int main(int argc, char** argv) {
       "--diff", compare.diff,
       "write a difference image (a folder of them for folders) where frames differ");
 
-  softbake::BenchOptions bench;
+  return compareApp;
+}
+
+CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
   CLI::App* benchApp = app.add_subcommand(
       "bench",
       "Time a scene's simulation with no output files: per-stage median and p95 per step, "
@@ -134,7 +139,7 @@ int main(int argc, char** argv) {
                    "broad phases to run one after the other: sbhash, spatialhash, bvh, brute "
                    "(comma-separated; default: the scene's)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"sbhash", "spatialhash", "bvh", "brute"}));
+      ->check(CLI::IsMember(softbake::broadPhaseNames()));
   benchApp->add_option("--levels", bench.levels, "subdivision level of the sbhash boxes")
       ->check(CLI::Range(0, 8));
   benchApp
@@ -151,6 +156,26 @@ int main(int argc, char** argv) {
   benchApp->add_option("-o,--out", bench.out,
                        "folder for the --with-exports files (default: a temporary one, removed)");
 
+  return benchApp;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"softbake " SOFTBAKE_VERSION
+               " - offline soft-body simulation (Matyka-Ollila pressure bodies, Mesit-Guha "
+               "collisions) with OBJ sequence output",
+               "softbake"};
+  app.set_version_flag("--version", std::string("softbake ") + SOFTBAKE_VERSION);
+  app.require_subcommand(1);
+
+  RunCommandLine run;
+  CLI::App* runApp = addRunCommand(app, run);
+  softbake::CompareOptions compare;
+  CLI::App* compareApp = addCompareCommand(app, compare);
+  softbake::BenchOptions bench;
+  CLI::App* benchApp = addBenchCommand(app, bench);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -159,9 +184,9 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : (compareApp->parsed() ? 2 : code);
   }
   if (runApp->parsed()) {
-    if (renderOn) run.render = true;
-    if (renderOff) run.render = false;
-    return softbake::runCommand(run);
+    if (run.renderOn) run.options.render = true;
+    if (run.renderOff) run.options.render = false;
+    return softbake::runCommand(run.options);
   }
   if (compareApp->parsed()) return softbake::compareCommand(compare);
   if (benchApp->parsed()) return softbake::benchCommand(bench);

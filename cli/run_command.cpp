@@ -15,11 +15,11 @@
 #include "core/simulator.hpp"
 #include "core/text.hpp"
 #include "exporters/contact_writer.hpp"
-#include "output/frame_pipeline.hpp"
-#include "output/manifest.hpp"
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
+#include "output/frame_pipeline.hpp"
+#include "output/manifest.hpp"
 #include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
@@ -64,7 +64,7 @@ RenderOptions renderOptions(const RunOptions& options, const RenderSettings& sce
   return render;
 }
 
-VdbOptions vdbOptions(const RunOptions& options, const World& world) {
+VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology) {
   VdbOptions vdb;
   if (options.voxelSize) vdb.voxelSize = *options.voxelSize;
   vdb.fog = options.vdbFog;
@@ -73,9 +73,9 @@ VdbOptions vdbOptions(const RunOptions& options, const World& world) {
     vdb.compression = *options.vdbCompression == "blosc"  ? VdbOptions::Compression::Blosc
                       : *options.vdbCompression == "none" ? VdbOptions::Compression::None
                                                           : VdbOptions::Compression::Zip;
-  vdb.fps = world.settings.fps;
-  vdb.units = world.settings.units;
-  validate(vdb, world);  // before anything is written
+  vdb.fps = topology.settings.fps;
+  vdb.units = topology.settings.units;
+  validate(vdb, topology);  // before anything is written
   return vdb;
 }
 
@@ -111,28 +111,17 @@ void removeStaleFrames(const fs::path& folder, const std::string& scene, const c
       fs::remove(entry.path(), error);
 }
 
-int run(const RunOptions& options) {
-  std::optional<tbb::global_control> threadLimit;
-  if (options.threads > 0)
-    threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
-
-  SceneFile scene = loadSceneInput(options.input);
-  applyOverrides(options, scene);
-  for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
-
-  BuildReport report;
-  Simulator simulator(buildWorld(scene.setup, &report));
-  for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
-  const World& world = simulator.world();
-  const std::string& name = scene.setup.name;
+/// The scene's size, its substeps and its collision setup, on stdout.
+void describeRun(const std::string& name, const Simulator& simulator) {
+  const SceneTopology& topology = simulator.topology();
   std::size_t triangles = 0;
-  for (const Body& body : world.bodies) triangles += body.triangleCount;
+  for (const Body& body : topology.bodies) triangles += body.triangleCount;
   std::printf(
       "scene '%s': %zu bodies, %zu particles, %zu triangles, %zu springs; %d frames at %g fps\n",
-      name.c_str(), world.bodies.size(), world.particleCount(), triangles, world.springs.size(),
-      world.settings.frames, world.settings.fps);
+      name.c_str(), topology.bodies.size(), topology.particleCount(), triangles,
+      topology.springs.size(), topology.settings.frames, topology.settings.fps);
   describeSubsteps(simulator.substeps());
-  const CollisionSettings& collisions = world.settings.collisions;
+  const CollisionSettings& collisions = topology.settings.collisions;
   if (simulator.collides())
     std::printf("collisions: %s broad phase%s, %s response\n",
                 std::string(broadPhaseName(collisions.broadPhase)).c_str(),
@@ -142,43 +131,46 @@ int run(const RunOptions& options) {
                 std::string(responseModeName(collisions.response)).c_str());
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
+}
 
-  const RenderOptions render = renderOptions(options, scene.render);
-  std::optional<VdbOptions> vdb;
-  if (scene.output.vdb) vdb = vdbOptions(options, world);
-
-  // Everything above validated the input: only now is anything written.
-  fs::create_directories(options.out);
-  fs::remove(options.out / "manifest.json");
-  const int frames = world.settings.frames;
-  Manifest manifest = describeWorld(world, name, frames, scene.output.framePadding);
+/// Every writer the scene's output asks for, each sequence's stale frames of an earlier, longer
+/// run removed and the sequence listed in `manifest`.
+std::vector<std::unique_ptr<FrameSink>> openSinks(const RunOptions& options, const SceneFile& scene,
+                                                  const Simulator& simulator,
+                                                  const RenderOptions& render,
+                                                  const std::optional<VdbOptions>& vdb,
+                                                  Manifest& manifest) {
+  const std::shared_ptr<const SceneTopology>& topology = simulator.sharedTopology();
+  const std::string& name = scene.setup.name;
+  const int padding = scene.output.framePadding;
   std::vector<std::unique_ptr<FrameSink>> sinks;
-  // Each sequence: stale frames of an earlier, longer run go, the manifest lists it, a thread
-  // writes it.
   auto addSequence = [&](const char* folder, const char* extension, auto sink) {
     removeStaleFrames(options.out / folder, name, extension);
     manifest.sequences.push_back(sink->sequence());
     sinks.push_back(std::move(sink));
   };
-  const int padding = scene.output.framePadding;
   if (scene.output.obj)
     addSequence("obj", ".obj",
-                std::make_unique<ObjSequenceWriter>(world, options.out, name, padding));
+                std::make_unique<ObjSequenceWriter>(topology, options.out, name, padding));
   if (scene.output.contacts)
     addSequence("contacts", ".json",
-                std::make_unique<ContactWriter>(world, options.out, name, padding));
+                std::make_unique<ContactWriter>(*topology, options.out, name, padding));
   if (vdb)
     addSequence("vdb", ".vdb",
-                std::make_unique<VdbSequenceWriter>(world, options.out, name, *vdb, padding));
+                std::make_unique<VdbSequenceWriter>(*topology, options.out, name, *vdb, padding));
   if (scene.output.png)
-    addSequence("png", ".png",
-                std::make_unique<PngSequenceRenderer>(world, options.out, name, render, padding));
-  FramePipeline pipeline(std::move(sinks), world.particleCount());
+    addSequence(
+        "png", ".png",
+        std::make_unique<PngSequenceRenderer>(topology, options.out, name, render, padding));
+  return sinks;
+}
 
-  std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
-  ProgressDisplay progress(frames, options.quiet);
+/// Simulates every frame and hands it to the writers; returns the contacts over all substeps.
+StepStats bake(Simulator& simulator, FramePipeline& pipeline, ProgressDisplay& progress) {
+  const SimulationState& state = simulator.state();
+  const SimulationSettings& settings = simulator.topology().settings;
   StepStats totals;
-  for (int frame = 1; frame <= frames; ++frame) {
+  for (int frame = 1; frame <= settings.frames; ++frame) {
     if (frame > 1) {
       simulator.advanceToFrame(frame);
       const StepStats& stats = simulator.lastFrameStats();
@@ -190,13 +182,46 @@ int run(const RunOptions& options) {
     }
     Frame& out = pipeline.acquire();
     out.number = frame;
-    out.time = (frame - 1) / world.settings.fps;
-    std::copy(world.position.begin(), world.position.end(), out.positions.begin());
-    std::copy(world.velocity.begin(), world.velocity.end(), out.velocities.begin());
+    out.time = (frame - 1) / settings.fps;
+    std::copy(state.position.begin(), state.position.end(), out.positions.begin());
+    std::copy(state.velocity.begin(), state.velocity.end(), out.velocities.begin());
     out.contacts = simulator.contacts();
     pipeline.submit(out);
     progress.update(frame);
   }
+  return totals;
+}
+
+int run(const RunOptions& options) {
+  std::optional<tbb::global_control> threadLimit;
+  if (options.threads > 0)
+    threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
+
+  SceneFile scene = loadSceneInput(options.input);
+  applyOverrides(options, scene);
+  for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
+
+  BuildReport report;
+  Simulator simulator(buildSceneTopology(scene.setup, &report));
+  for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
+  const SceneTopology& topology = simulator.topology();
+  const std::string& name = scene.setup.name;
+  describeRun(name, simulator);
+  const RenderOptions render = renderOptions(options, scene.render);
+  std::optional<VdbOptions> vdb;
+  if (scene.output.vdb) vdb = vdbOptions(options, topology);
+
+  // Everything above validated the input: only now is anything written.
+  fs::create_directories(options.out);
+  fs::remove(options.out / "manifest.json");
+  const int frames = topology.settings.frames;
+  Manifest manifest = describeScene(topology, name, frames, scene.output.framePadding);
+  FramePipeline pipeline(openSinks(options, scene, simulator, render, vdb, manifest),
+                         topology.particleCount());
+
+  std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
+  ProgressDisplay progress(frames, options.quiet);
+  const StepStats totals = bake(simulator, pipeline, progress);
   pipeline.finish();
   progress.finish();
   const double seconds = progress.elapsedSeconds();

@@ -33,11 +33,11 @@ void applySimulationOverrides(const SimulationOverrides& overrides, SimulationSe
     settings.substeps = *overrides.substeps == "auto" ? 0 : std::stoi(*overrides.substeps);
   CollisionSettings& collisions = settings.collisions;
   if (overrides.broadPhase && !parseBroadPhase(*overrides.broadPhase, collisions.broadPhase))
-    throw Error(cat("--broadphase: expected sbhash, spatialhash, bvh or brute, got '",
+    throw Error(cat("--broadphase: expected ", alternatives(broadPhaseNames()), ", got '",
                     *overrides.broadPhase, "'"));
   if (overrides.response && !parseResponseMode(*overrides.response, collisions.response))
-    throw Error(
-        cat("--response: expected two-sided, paper or none, got '", *overrides.response, "'"));
+    throw Error(cat("--response: expected ", alternatives(responseModeNames()), ", got '",
+                    *overrides.response, "'"));
   if (overrides.noResponse) collisions.response = ResponseMode::None;
   if (overrides.levels) collisions.subdivisionLevels = *overrides.levels;
   if (overrides.noPairCache) collisions.pairCache = false;

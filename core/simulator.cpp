@@ -1,19 +1,26 @@
 #include "core/simulator.hpp"
 
-#include "core/error.hpp"
-#include "core/dynamics/forces.hpp"
-#include "core/dynamics/integrator.hpp"
 #include "core/collision/plane_contact.hpp"
-#include "core/text.hpp"
+#include "core/dynamics/integrator.hpp"
+#include "core/error.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/text.hpp"
 
 namespace softbake {
 
-Simulator::Simulator(World world)
-    : world_(std::move(world)),
-      substeps_(chooseSubsteps(world_, world_.settings.substeps)),
-      detector_(world_.settings.collisions) {
-  const std::vector<CollisionSurface>& surfaces = world_.collision.surfaces;
+Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationState state)
+    : topology_(std::move(topology)),
+      state_(std::move(state)),
+      forces_(*topology_),
+      substepStart_(state_.position),
+      substeps_(chooseSubsteps(*topology_, topology_->settings.substeps)),
+      detector_(topology_->settings.collisions) {
+  if (state_.position.size() != topology_->particleCount() ||
+      state_.velocity.size() != topology_->particleCount())
+    throw Error(cat("a simulation state of ", state_.position.size(), " positions and ",
+                    state_.velocity.size(), " velocities does not fit a scene of ",
+                    topology_->particleCount(), " particles"));
+  const std::vector<CollisionSurface>& surfaces = topology_->collision.surfaces;
   std::size_t moving = 0;
   for (const CollisionSurface& surface : surfaces) {
     moving += surface.moving;
@@ -22,21 +29,27 @@ Simulator::Simulator(World world)
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
 }
 
+Simulator::Simulator(std::shared_ptr<const SceneTopology> topology)
+    : Simulator(topology, initialState(*topology)) {}
+
+Simulator::Simulator(SceneTopology topology)
+    : Simulator(std::make_shared<const SceneTopology>(std::move(topology))) {}
+
 void Simulator::step(int frame) {
+  const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
-  computeSpringForces(world_);
-  computeVolumes(world_);
-  computePressureForces(world_);
+  computeSpringForces(topology, state_, forces_);
+  computeVolumes(topology, state_, forces_);
+  computePressureForces(topology, state_, forces_);
   clock.lap(Stage::Forces);
-  if (!integrate(world_, Scalar(substeps_.timeStep))) reportBlowUp(frame);
+  if (!integrate(topology, forces_, Scalar(substeps_.timeStep), state_, substepStart_))
+    reportBlowUp(frame);
   clock.lap(Stage::Integration);
-  const ResponseMode response = world_.settings.collisions.response;
+  const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
-    updateCollisionBoxes(world_);
-    clock.lap(Stage::Boxes);
-    detector_.detect(world_, &clock);
+    detector_.detect(topology, {substepStart_, state_.position}, &clock);
     const CollisionResponseStats responses =
-        respondToCollisions(world_, detector_, response, contacts_);
+        respondToCollisions(topology, detector_, response, state_, contacts_);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
@@ -44,7 +57,8 @@ void Simulator::step(int frame) {
     stats_.responses.cornerResponses += responses.cornerResponses;
     stats_.responses.edgePushes += responses.edgePushes;
   }
-  stats_.planeContacts += resolvePlaneContacts(world_, response != ResponseMode::None);
+  stats_.planeContacts +=
+      resolvePlaneContacts(topology, substepStart_, state_, response != ResponseMode::None);
   clock.lap(Stage::Planes);
 }
 
@@ -54,13 +68,14 @@ void Simulator::advanceToFrame(int frame) {
 }
 
 void Simulator::reportBlowUp(int frame) const {
-  const Index particle = findRunawayParticle(world_);
-  const Body& body = world_.bodies[particle == kNoParticle ? 0 : world_.particleBody[particle]];
-  const Vec3& v = world_.velocity[particle == kNoParticle ? 0 : particle];
+  const SceneTopology& topology = *topology_;
+  const Index particle = findRunawayParticle(topology, state_);
+  const Body& body = topology.bodies[particle == kNoParticle ? 0 : topology.particleBody[particle]];
+  const Vec3& v = state_.velocity[particle == kNoParticle ? 0 : particle];
   throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
                   particle - body.firstParticle, " reached speed ",
                   v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
-                  world_.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
+                  topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
                   ", stable from ", substeps_.minimumStableSubsteps, ") or a lower stiffness"));
 }
 

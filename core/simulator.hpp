@@ -1,19 +1,25 @@
 #pragma once
-/// Advances a World frame by frame: the fixed sequence of stages of one substep.
+/// Advances a SimulationState frame by frame over a shared, immutable SceneTopology: the fixed
+/// sequence of stages of one substep.
 ///
-///   forces (springs, volume, pressure) → integrate (paper §1.2) → collisions → blow-up check
+///   forces (springs, volume, pressure) → integrate (paper §1.2) → collisions → planes
 ///
-/// The collision stage sees each particle's segment previousPosition → position, which is what the
-/// line–triangle tests of §2.3 need. Nothing here allocates after construction.
+/// The integrator keeps where each particle started the substep, and the collision stage sees
+/// each particle's segment from there to its new position, which is what the line–triangle tests
+/// of §2.3 need. Each stage's scratch (forces, boxes, pairs, contacts) is owned here and sized
+/// once: nothing allocates after the first substeps.
 
+#include <memory>
 #include <vector>
 
+#include "core/collision/contact.hpp"
 #include "core/collision/detection.hpp"
 #include "core/collision/response.hpp"
-#include "core/collision/contact.hpp"
+#include "core/dynamics/forces.hpp"
 #include "core/dynamics/stability.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 #include "core/stage_timer.hpp"
-#include "core/scene/world.hpp"
 
 namespace softbake {
 
@@ -27,11 +33,19 @@ struct StepStats {
 
 class Simulator {
  public:
-  /// Chooses the substeps from world.settings.substeps (0: automatic).
-  explicit Simulator(World world);
+  /// Starts from `state` (one entry per particle of `topology`), or from the topology's initial
+  /// state. Chooses the substeps from settings.substeps (0: automatic).
+  Simulator(std::shared_ptr<const SceneTopology> topology, SimulationState state);
+  explicit Simulator(std::shared_ptr<const SceneTopology> topology);
+  explicit Simulator(SceneTopology topology);
 
-  const World& world() const { return world_; }
-  World& world() { return world_; }
+  const SceneTopology& topology() const { return *topology_; }
+  /// For exporters and the renderer, which keep the topology for as long as they write.
+  const std::shared_ptr<const SceneTopology>& sharedTopology() const { return topology_; }
+  const SimulationState& state() const { return state_; }
+  SimulationState& state() { return state_; }
+  /// The force stage's latest results (volumes and pressures per body among them).
+  const ForceBuffers& forces() const { return forces_; }
   const SubstepChoice& substeps() const { return substeps_; }
   const StepStats& lastFrameStats() const { return stats_; }
   /// Broad-phase pairs of the latest substep.
@@ -55,7 +69,10 @@ class Simulator {
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
 
-  World world_;
+  std::shared_ptr<const SceneTopology> topology_;
+  SimulationState state_;
+  ForceBuffers forces_;
+  std::vector<Vec3> substepStart_;  ///< every particle's position at the start of the substep
   SubstepChoice substeps_;
   StepStats stats_;
   CollisionDetector detector_;

@@ -3,6 +3,8 @@
 
 #include <sstream>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace softbake {
 
@@ -12,6 +14,17 @@ std::string cat(const Parts&... parts) {
   std::ostringstream out;
   (out << ... << parts);
   return out.str();
+}
+
+/// "a, b, c or d", each name between `quote`s: the alternatives of an error message.
+inline std::string alternatives(const std::vector<std::string>& names,
+                                std::string_view quote = "") {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i) text += i + 1 == names.size() ? " or " : ", ";
+    text.append(quote).append(names[i]).append(quote);
+  }
+  return text;
 }
 
 }  // namespace softbake

@@ -12,17 +12,18 @@ nlohmann::ordered_json vector(const Vec3& v) {
 }
 }  // namespace
 
-ContactWriter::ContactWriter(const World& world, const std::filesystem::path& outputDirectory,
-                             std::string scene, int framePadding)
+ContactWriter::ContactWriter(const SceneTopology& topology,
+                             const std::filesystem::path& outputDirectory, std::string scene,
+                             int framePadding)
     : outputDirectory_(outputDirectory),
       naming_{"contacts", std::move(scene), ".json", framePadding} {
-  for (const Body& body : world.bodies) {
+  for (const Body& body : topology.bodies) {
     surfaceNames_.push_back(body.name);
     bodyFirstParticle_.push_back(body.firstParticle);
   }
-  for (const StaticMeshCollider& collider : world.staticMeshes)
+  for (const StaticMeshCollider& collider : topology.staticMeshes)
     surfaceNames_.push_back(collider.name);
-  for (const CollisionSurface& surface : world.collision.surfaces)
+  for (const CollisionSurface& surface : topology.collision.surfaces)
     surfaceFirstTriangle_.push_back(surface.firstTriangle);
   makeDirectories(outputDirectory_ / naming_.folder);
 }

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "output/frame_naming.hpp"
 #include "output/manifest.hpp"
@@ -22,9 +22,9 @@ namespace softbake {
 
 class ContactWriter : public FrameSink {
  public:
-  /// Copies what it needs from `world`. Creates OUT/contacts. Throws softbake::Error.
-  ContactWriter(const World& world, const std::filesystem::path& outputDirectory, std::string scene,
-                int framePadding = 4);
+  /// Copies what it needs from `topology`. Creates OUT/contacts. Throws softbake::Error.
+  ContactWriter(const SceneTopology& topology, const std::filesystem::path& outputDirectory,
+                std::string scene, int framePadding = 4);
   void write(const Frame& frame) override;
   const char* name() const override { return "contacts"; }
   std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }

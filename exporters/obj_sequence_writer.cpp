@@ -6,7 +6,6 @@
 #include <set>
 
 #include "core/error.hpp"
-#include "core/mesh/normals.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
 #include "output/version.hpp"
@@ -126,17 +125,17 @@ std::string texcoordLines(const RenderMesh& render) {
 }
 
 // `firstTexcoord` is the 1-based OBJ index of the body's first vt.
-std::string faceLines(const World& world, const Body& body, const std::string& material,
+std::string faceLines(const SceneTopology& topology, const Body& body, const std::string& material,
                       std::uint64_t firstTexcoord) {
   std::string text = cat("usemtl ", material, "\ns 1\n");
   const bool hasUvs = !body.render.uvs.empty();
   text.reserve(text.size() + std::size_t(body.triangleCount) * (hasUvs ? 40 : 30));
   for (Index t = 0; t < body.triangleCount; ++t) {
-    const Triangle& triangle = world.triangles[body.firstTriangle + t];
+    const Triangle& triangle = topology.triangles[body.firstTriangle + t];
     char line[kMaxLine];
     char* p = putText(line, "f");
     for (int corner = 0; corner < 3; ++corner) {
-      // Particles are numbered globally in the World as in the file, so v and vn share the index.
+      // Particles are numbered globally in the scene as in the file, so v and vn share the index.
       char index[kMaxNumber];
       char* const indexEnd = putNumber(index, std::uint64_t(triangle[corner]) + 1);
       *p++ = ' ';
@@ -180,30 +179,28 @@ void checkScene(const std::string& scene) {
 
 }  // namespace
 
-ObjSequenceWriter::ObjSequenceWriter(const World& world,
+ObjSequenceWriter::ObjSequenceWriter(std::shared_ptr<const SceneTopology> topology,
                                      const std::filesystem::path& outputDirectory,
                                      std::string scene, int framePadding)
-    : particleCount_(world.particleCount()),
+    : topology_(std::move(topology)),
+      particleCount_(topology_->particleCount()),
       objDirectory_(outputDirectory / "obj"),
       scene_(std::move(scene)),
       framePadding_(framePadding) {
   checkScene(scene_);
   if (framePadding < 1 || framePadding > 9)
     throw Error(cat("frame padding must be 1 to 9 digits, not ", framePadding));
-  for (const Body& body : world.bodies) checkRenderMesh(body);
+  const std::vector<Body>& bodies = topology_->bodies;
+  for (const Body& body : bodies) checkRenderMesh(body);
 
-  const std::vector<std::string> names = objectNames(world.bodies);
+  const std::vector<std::string> names = objectNames(bodies);
   std::uint64_t firstTexcoord = 1;
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    const Body& body = world.bodies[b];
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const Body& body = bodies[b];
     text_.push_back({cat("o ", names[b], "\n"), texcoordLines(body.render),
-                     faceLines(world, body, names[b], firstTexcoord)});
+                     faceLines(*topology_, body, names[b], firstTexcoord)});
     firstTexcoord += body.render.uvs.size();
   }
-
-  topology_.bodies = world.bodies;
-  for (Body& body : topology_.bodies) body.render = {};
-  topology_.triangles = world.triangles;
 
   makeDirectories(objDirectory_);
   const std::string materials = materialLibrary(names, scene_);
@@ -246,7 +243,7 @@ void ObjSequenceWriter::write(const Frame& frame) {
   buffer_ += ".mtl\n";
   addFormattedSince(0);
 
-  for (std::size_t b = 0; b < text_.size(); ++b) formatBody(frame, topology_.bodies[b], text_[b]);
+  for (std::size_t b = 0; b < text_.size(); ++b) formatBody(frame, topology_->bodies[b], text_[b]);
 
   parts_.clear();
   std::uint64_t bytes = 0;
@@ -276,7 +273,7 @@ void ObjSequenceWriter::formatBody(const Frame& frame, const Body& body, const B
   addFixed(text.texcoords);
 
   begin = buffer_.size();
-  computeSmoothNormals(topology_, frame.positions, body, normals_);
+  computeBodyNormals(*topology_, frame.positions, body, normals_);
   for (const Vec3f& n : normals_) appendVectorLine(buffer_, "vn ", n);
   addFormattedSince(begin);
   addFixed(text.faces);

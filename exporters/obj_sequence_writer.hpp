@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/world.hpp"
+#include <memory>
+
+#include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "output/frame_naming.hpp"
 #include "output/manifest.hpp"
@@ -25,13 +27,14 @@ namespace softbake {
 /// it lies.
 class ObjSequenceWriter : public FrameSink {
  public:
-  /// Copies what it needs from `world`, which may be destroyed afterwards. Creates OUT/obj and
+  /// Keeps `topology` (shared, read-only) for the normals. Creates OUT/obj and
   /// writes the material library at once, so an unwritable output fails before any simulation.
   /// `scene` becomes the file name stem: it must be non-empty and hold no '/' or whitespace.
   /// Body names are written with whitespace replaced by '_' and made unique. Throws
   /// softbake::Error.
-  ObjSequenceWriter(const World& world, const std::filesystem::path& outputDirectory,
-                    std::string scene, int framePadding = 4);
+  ObjSequenceWriter(std::shared_ptr<const SceneTopology> topology,
+                    const std::filesystem::path& outputDirectory, std::string scene,
+                    int framePadding = 4);
 
   /// Throws softbake::Error naming the body and frame for a non-finite position, or naming the
   /// file when writing fails; no file is left behind for that frame either way.
@@ -66,9 +69,7 @@ class ObjSequenceWriter : public FrameSink {
   void addFixed(const std::string& text) { pieces_.push_back({&text}); }
   void addFormattedSince(std::size_t begin) { pieces_.push_back({nullptr, begin, buffer_.size()}); }
 
-  /// Only `bodies` (without render data, which lives on in `text_`) and `triangles`: what the
-  /// normals need. The particle arrays stay empty.
-  World topology_;
+  std::shared_ptr<const SceneTopology> topology_;
   std::vector<BodyText> text_;
   std::size_t particleCount_ = 0;
   std::filesystem::path objDirectory_;

@@ -13,8 +13,8 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "output/atomic_file.hpp"
 #include "exporters/mesh_level_set.hpp"
+#include "output/atomic_file.hpp"
 #include "output/version.hpp"
 
 namespace softbake {
@@ -44,11 +44,12 @@ std::uint64_t halfPhysicalMemory() {
 }
 
 /// Surface area of every body at rest, in world units².
-double restSurfaceArea(const World& world) {
+double restSurfaceArea(const SceneTopology& topology) {
   double area = 0;
-  for (const Triangle& t : world.triangles) {
-    const Vec3d a = world.position[t[0]].cast<double>(), b = world.position[t[1]].cast<double>(),
-                c = world.position[t[2]].cast<double>();
+  for (const Triangle& t : topology.triangles) {
+    const Vec3d a = topology.restPosition[t[0]].cast<double>(),
+                b = topology.restPosition[t[1]].cast<double>(),
+                c = topology.restPosition[t[2]].cast<double>();
     area += 0.5 * (b - a).cross(c - a).norm();
   }
   return area;
@@ -83,18 +84,20 @@ bool bloscAvailable() {
   return openvdb::io::Archive::hasBloscCompression();
 }
 
-double autoVoxelSize(const World& world) {
+double autoVoxelSize(const SceneTopology& topology) {
   double length = 0;
   std::size_t edges = 0;
-  for (const Triangle& t : world.triangles)
+  for (const Triangle& t : topology.triangles)
     for (int e = 0; e < 3; ++e) {
-      length += (world.position[t[e]] - world.position[t[(e + 1) % 3]]).cast<double>().norm();
+      length += (topology.restPosition[t[e]] - topology.restPosition[t[(e + 1) % 3]])
+                    .cast<double>()
+                    .norm();
       ++edges;
     }
   return edges == 0 ? 0.0 : 0.5 * length / double(edges);
 }
 
-void validate(const VdbOptions& options, const World& world) {
+void validate(const VdbOptions& options, const SceneTopology& topology) {
   const bool automatic = options.voxelSize == 0;
   if (!automatic && !(options.voxelSize > 0 && std::isfinite(options.voxelSize)))
     throw Error(cat("VDB voxel size ", options.voxelSize,
@@ -108,7 +111,7 @@ void validate(const VdbOptions& options, const World& world) {
     throw Error("this OpenVDB build has no Blosc compression: use zip or none");
   if (!(options.fps > 0)) throw Error(cat("VDB fps ", options.fps, " must be positive"));
 
-  const double voxel = automatic ? autoVoxelSize(world) : options.voxelSize;
+  const double voxel = automatic ? autoVoxelSize(topology) : options.voxelSize;
   if (!(voxel > 0))
     throw Error("cannot derive a VDB voxel size: the bodies have no edges; give a voxel size");
 
@@ -117,7 +120,7 @@ void validate(const VdbOptions& options, const World& world) {
   // asked, all doubled for partly filled leaves and the trees' own structure.
   const double bytesPerVoxel =
       2.0 * (8.0 + (options.velocity ? 12.0 : 0.0) + (options.fog ? 4.0 : 0.0));
-  const double voxels = restSurfaceArea(world) / (voxel * voxel) * (2 * options.bandWidth + 1);
+  const double voxels = restSurfaceArea(topology) / (voxel * voxel) * (2 * options.bandWidth + 1);
   const double bytes = voxels * bytesPerVoxel;
   const double limit =
       double(options.memoryLimit != 0 ? options.memoryLimit : halfPhysicalMemory());
@@ -130,19 +133,19 @@ void validate(const VdbOptions& options, const World& world) {
   }
 }
 
-VdbSequenceWriter::VdbSequenceWriter(const World& world,
+VdbSequenceWriter::VdbSequenceWriter(const SceneTopology& topology,
                                      const std::filesystem::path& outputDirectory,
                                      std::string scene, VdbOptions options, int framePadding)
     : outputDirectory_(outputDirectory),
       naming_{"vdb", std::move(scene), ".vdb", framePadding},
       options_(std::move(options)) {
-  validate(options_, world);
+  validate(options_, topology);
   initializeOpenVdb();
-  voxelSize_ = options_.voxelSize == 0 ? autoVoxelSize(world) : options_.voxelSize;
-  particleCount_ = world.particleCount();
+  voxelSize_ = options_.voxelSize == 0 ? autoVoxelSize(topology) : options_.voxelSize;
+  particleCount_ = topology.particleCount();
 
   std::set<std::string> used;
-  for (const Body& body : world.bodies) {
+  for (const Body& body : topology.bodies) {
     BodyData data;
     std::string unique = sanitize(body.name);
     for (int n = 2; !used.insert(unique).second; ++n) unique = cat(sanitize(body.name), "_", n);
@@ -152,7 +155,7 @@ VdbSequenceWriter::VdbSequenceWriter(const World& world,
     std::vector<MeshLevelSet::TriangleIndices> triangles;
     triangles.reserve(body.triangleCount);
     for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
-      const Triangle& global = world.triangles[t];
+      const Triangle& global = topology.triangles[t];
       triangles.push_back({std::uint32_t(global[0] - body.firstParticle),
                            std::uint32_t(global[1] - body.firstParticle),
                            std::uint32_t(global[2] - body.firstParticle)});
@@ -177,6 +180,73 @@ std::string VdbSequenceWriter::gridName(std::size_t body, const std::string& kin
   return cat(bodies_[body].name, "_", kind);
 }
 
+namespace {
+
+/// Copies every entry of `metadata` onto `grid`, and the body's name when there is one.
+void addMetadata(openvdb::GridBase& grid, const openvdb::MetaMap& metadata,
+                 const std::string& body) {
+  for (auto it = metadata.beginMeta(); it != metadata.endMeta(); ++it)
+    grid.insertMeta(it->first, *it->second);
+  if (!body.empty()) grid.insertMeta("body", openvdb::StringMetadata(body));
+}
+
+/// The frame's contacts as a PointDataGrid named `contacts`: position, `N` and `body`.
+openvdb::GridBase::Ptr contactGrid(const std::vector<Contact>& frameContacts, char up,
+                                   const openvdb::math::Transform& transform) {
+  std::vector<openvdb::Vec3f> positions, normals;
+  std::vector<openvdb::Int32> surfaces;
+  for (const Contact& c : frameContacts) {
+    positions.emplace_back(toOutputAxes(c.position, up));
+    normals.emplace_back(toOutputAxes(c.normal, up));
+    surfaces.push_back(openvdb::Int32(c.surfaceA));
+  }
+  namespace points_ = openvdb::points;
+  const points_::PointAttributeVector<openvdb::Vec3f> positionArray(positions);
+  auto pointIndex = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(
+      positionArray, transform);
+  auto contacts = points_::createPointDataGrid<points_::NullCodec, points_::PointDataGrid>(
+      *pointIndex, positionArray, transform);
+  points_::appendAttribute<openvdb::Vec3f>(contacts->tree(), "N");
+  points_::populateAttribute(contacts->tree(), pointIndex->tree(), "N",
+                             points_::PointAttributeVector<openvdb::Vec3f>(normals));
+  points_::appendAttribute<openvdb::Int32>(contacts->tree(), "body");
+  points_::populateAttribute(contacts->tree(), pointIndex->tree(), "body",
+                             points_::PointAttributeVector<openvdb::Int32>(surfaces));
+  contacts->setName("contacts");
+  return contacts;
+}
+
+/// Writes `grids` to `path` under a temporary name and renames it, so readers never see a torn
+/// file. Returns the file's size.
+std::uintmax_t writeGridsAtomically(const std::filesystem::path& path,
+                                    const openvdb::GridPtrVec& grids,
+                                    const openvdb::MetaMap& metadata, std::uint32_t compression) {
+  const std::filesystem::path temporary =
+      path.parent_path() / cat(".", path.filename().string(), ".tmp-", long(::getpid()), "-",
+                               temporaryCounter.fetch_add(1, std::memory_order_relaxed));
+  try {
+    openvdb::io::File file(temporary.string());
+    file.setCompression(compression);
+    file.write(grids, metadata);
+    file.close();
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw Error(cat("cannot write '", path.string(), "': ", e.what()));
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw Error(cat("cannot write '", path.string(), "': rename failed: ", error.message()));
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  return error ? 0 : size;
+}
+
+}  // namespace
+
 void VdbSequenceWriter::write(const Frame& frame) {
   if (frame.positions.size() < particleCount_)
     throw Error(cat("frame ", frame.number, " has ", frame.positions.size(),
@@ -186,7 +256,6 @@ void VdbSequenceWriter::write(const Frame& frame) {
                     " particle velocities for ", frame.positions.size(),
                     " positions: the VDB `vel` grid needs one per particle"));
 
-  const char up = options_.upAxis;
   openvdb::MetaMap metadata;
   metadata.insertMeta("frame", openvdb::Int32Metadata(frame.number));
   metadata.insertMeta("time", openvdb::DoubleMetadata(frame.time));
@@ -194,16 +263,9 @@ void VdbSequenceWriter::write(const Frame& frame) {
   metadata.insertMeta("scene", openvdb::StringMetadata(naming_.scene));
   metadata.insertMeta("softbake_version", openvdb::StringMetadata(softbakeVersion()));
   metadata.insertMeta("units", openvdb::StringMetadata(options_.units));
-  const auto addMetadata = [&](openvdb::GridBase& grid, const std::string& body) {
-    for (auto it = metadata.beginMeta(); it != metadata.endMeta(); ++it)
-      grid.insertMeta(it->first, *it->second);
-    if (!body.empty()) grid.insertMeta("body", openvdb::StringMetadata(body));
-  };
 
-  const openvdb::math::Transform::Ptr transform =
-      openvdb::math::Transform::createLinearTransform(voxelSize_);
+  const char up = options_.upAxis;
   openvdb::GridPtrVec grids;
-
   std::vector<openvdb::Vec3s> points, velocities;  // points in index space
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const BodyData& body = bodies_[b];
@@ -226,7 +288,7 @@ void VdbSequenceWriter::write(const Frame& frame) {
 
     openvdb::FloatGrid::Ptr surface = level.distance;
     surface->setName(gridName(b, body.levelSet->closed() ? "surface" : "surface_udf"));
-    addMetadata(*surface, body.name);
+    addMetadata(*surface, metadata, body.name);
     grids.push_back(surface);
 
     if (options_.fog && body.levelSet->closed()) {
@@ -239,60 +301,20 @@ void VdbSequenceWriter::write(const Frame& frame) {
     if (level.velocity) {
       level.velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
       level.velocity->setName(gridName(b, "vel"));
-      addMetadata(*level.velocity, body.name);
+      addMetadata(*level.velocity, metadata, body.name);
       grids.push_back(level.velocity);
     }
   }
-
   if (options_.contacts && !frame.contacts.empty()) {
-    std::vector<openvdb::Vec3f> positions, normals;
-    std::vector<openvdb::Int32> surfaces;
-    for (const Contact& c : frame.contacts) {
-      positions.emplace_back(toOutputAxes(c.position, up));
-      normals.emplace_back(toOutputAxes(c.normal, up));
-      surfaces.push_back(openvdb::Int32(c.surfaceA));
-    }
-    namespace points_ = openvdb::points;
-    const points_::PointAttributeVector<openvdb::Vec3f> positionArray(positions);
-    auto pointIndex = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(
-        positionArray, *transform);
-    auto contacts = points_::createPointDataGrid<points_::NullCodec, points_::PointDataGrid>(
-        *pointIndex, positionArray, *transform);
-    points_::appendAttribute<openvdb::Vec3f>(contacts->tree(), "N");
-    points_::populateAttribute(contacts->tree(), pointIndex->tree(), "N",
-                               points_::PointAttributeVector<openvdb::Vec3f>(normals));
-    points_::appendAttribute<openvdb::Int32>(contacts->tree(), "body");
-    points_::populateAttribute(contacts->tree(), pointIndex->tree(), "body",
-                               points_::PointAttributeVector<openvdb::Int32>(surfaces));
-    contacts->setName("contacts");
-    addMetadata(*contacts, "");
+    const openvdb::math::Transform::Ptr transform =
+        openvdb::math::Transform::createLinearTransform(voxelSize_);
+    openvdb::GridBase::Ptr contacts = contactGrid(frame.contacts, up, *transform);
+    addMetadata(*contacts, metadata, "");
     grids.push_back(contacts);
   }
-
-  // Written under a temporary name and renamed, so readers never see a torn file.
-  const std::filesystem::path path = framePath(frame.number);
-  const std::filesystem::path temporary =
-      path.parent_path() / cat(".", path.filename().string(), ".tmp-", long(::getpid()), "-",
-                               temporaryCounter.fetch_add(1, std::memory_order_relaxed));
-  try {
-    openvdb::io::File file(temporary.string());
-    file.setCompression(compressionFlags(options_.compression));
-    file.write(grids, metadata);
-    file.close();
-  } catch (const std::exception& e) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw Error(cat("cannot write '", path.string(), "': ", e.what()));
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw Error(cat("cannot write '", path.string(), "': rename failed: ", error.message()));
-  }
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  if (!error) bytes_.fetch_add(size, std::memory_order_relaxed);
+  const std::uintmax_t size = writeGridsAtomically(framePath(frame.number), grids, metadata,
+                                                   compressionFlags(options_.compression));
+  bytes_.fetch_add(size, std::memory_order_relaxed);
 }
 
 }  // namespace softbake

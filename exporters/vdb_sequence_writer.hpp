@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "output/frame_naming.hpp"
 #include "output/manifest.hpp"
@@ -64,20 +64,20 @@ struct VdbOptions {
 bool bloscAvailable();
 
 /// The automatic voxel size: half the mean triangle edge length of every body, at rest.
-double autoVoxelSize(const World& world);
+double autoVoxelSize(const SceneTopology& topology);
 
 /// Throws softbake::Error, before any work, for a voxel size <= 0 (when given) or not finite, a
 /// band narrower than 1 voxel, an up axis other than 'y'/'z', Blosc without Blosc, or when the
 /// estimated narrow-band voxels of the bodies at rest (surface area / voxel² × (2·band + 1))
 /// would take more than the memory limit; the message gives the numbers and the voxel size that
 /// would fit.
-void validate(const VdbOptions& options, const World& world);
+void validate(const VdbOptions& options, const SceneTopology& topology);
 
 class VdbSequenceWriter : public FrameSink {
  public:
-  /// Validates `options`, copies what it needs from `world` (which may be destroyed afterwards)
-  /// and creates OUT/vdb. Throws softbake::Error.
-  VdbSequenceWriter(const World& world, const std::filesystem::path& outputDirectory,
+  /// Validates `options`, copies what it needs from `topology` (which may be destroyed
+  /// afterwards) and creates OUT/vdb. Throws softbake::Error.
+  VdbSequenceWriter(const SceneTopology& topology, const std::filesystem::path& outputDirectory,
                     std::string scene, VdbOptions options, int framePadding = 4);
 
   /// Builds every grid of the frame and writes the file through a temporary name. Throws

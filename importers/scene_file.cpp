@@ -112,13 +112,13 @@ class SceneParser {
     CollisionSettings& collisions = scene_.setup.settings.collisions;
     if (auto broadPhase = object.find("broadphase")) {
       if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
-        broadPhase->fail("expected \"sbhash\", \"spatialhash\", \"bvh\" or \"brute\"");
+        broadPhase->fail(cat("expected ", alternatives(broadPhaseNames(), "\"")));
     }
     if (auto levels = object.find("levels"))
       collisions.subdivisionLevels = int(levels->integerIn(0, 8));
     if (auto response = object.find("response")) {
       if (!parseResponseMode(response->string(), collisions.response))
-        response->fail("expected \"two-sided\", \"paper\" or \"none\"");
+        response->fail(cat("expected ", alternatives(responseModeNames(), "\"")));
     }
     if (auto restitution = object.find("restitution"))
       collisions.restitution = Scalar(restitution->numberIn(0, 1));

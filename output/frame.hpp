@@ -12,7 +12,7 @@ namespace softbake {
 struct Frame {
   int number = 1;                 ///< 1-based: frame 1 is the initial state
   double time = 0;                ///< seconds since the start
-  std::vector<Vec3> positions;    ///< every particle of the World, global order
+  std::vector<Vec3> positions;    ///< every particle of the scene, global order
   std::vector<Vec3> velocities;   ///< m/s, same order as positions (the VDB `vel` grids)
   std::vector<Contact> contacts;  ///< the contacts of the frame's last substep
 };

@@ -7,14 +7,15 @@
 
 namespace softbake {
 
-Manifest describeWorld(const World& world, std::string scene, int framesWritten, int framePadding) {
+Manifest describeScene(const SceneTopology& topology, std::string scene, int framesWritten,
+                       int framePadding) {
   Manifest manifest;
   manifest.scene = std::move(scene);
-  manifest.fps = world.settings.fps;
+  manifest.fps = topology.settings.fps;
   manifest.framesWritten = framesWritten;
   manifest.framePadding = framePadding;
-  manifest.units = world.settings.units;
-  for (const Body& body : world.bodies)
+  manifest.units = topology.settings.units;
+  for (const Body& body : topology.bodies)
     manifest.bodies.push_back({body.name, body.particleCount, body.triangleCount, body.closed,
                                body.closed && body.gasAmount != 0});
   return manifest;

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 
 namespace softbake {
 
@@ -38,8 +38,8 @@ struct Manifest {
   std::vector<OutputSequence> sequences;
 };
 
-/// The scene, fps, units and bodies of `world`; sequences are left for the caller to add.
-Manifest describeWorld(const World& world, std::string scene, int framesWritten,
+/// The scene, fps, units and bodies of `topology`; sequences are left for the caller to add.
+Manifest describeScene(const SceneTopology& topology, std::string scene, int framesWritten,
                        int framePadding = 4);
 
 /// The JSON text, keys in a fixed order, ending in a newline.

@@ -34,7 +34,6 @@ unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int
 
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
-#include "core/mesh/normals.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
 
@@ -341,7 +340,8 @@ Vec3f bodyColor(std::size_t index) {
   return srgb.array().pow(2.2f).matrix();  // the shaders light in linear RGB
 }
 
-RenderScene makeRenderScene(const World& world, const RenderOptions& options) {
+RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
+                            const RenderOptions& options) {
   if (options.width < 1 || options.height < 1 || options.width > 16384 || options.height > 16384)
     throw Error(cat("renderer: image size ", options.width, "x", options.height,
                     " is out of range (1 to 16384 pixels a side)"));
@@ -349,20 +349,17 @@ RenderScene makeRenderScene(const World& world, const RenderOptions& options) {
     throw Error(
         cat("renderer: field of view ", options.fovDegrees, " degrees is out of range (1 to 170)"));
   RenderScene scene;
-  scene.topology.bodies = world.bodies;
-  scene.topology.triangles = world.triangles;
-  scene.topology.planes = world.planes;
-  scene.topology.staticMeshes = world.staticMeshes;
-  scene.topology.settings = world.settings;
+  scene.topology = std::move(shared);
+  const SceneTopology& topology = *scene.topology;
 
   Eigen::AlignedBox3f bounds;
-  for (const Vec3& p : world.position) bounds.extend(p.cast<float>());
-  for (const StaticMeshCollider& collider : world.staticMeshes)
+  for (const Vec3& p : topology.restPosition) bounds.extend(p.cast<float>());
+  for (const StaticMeshCollider& collider : topology.staticMeshes)
     for (const Vec3f& p : collider.mesh.positions) bounds.extend(p);
-  if (!world.planes.empty() && !bounds.isEmpty()) {
+  if (!topology.planes.empty() && !bounds.isEmpty()) {
     // Falling bodies end on the ground: the bounds reach down to their shadow on it.
-    const Vec3f point = world.planes.front().point.cast<float>();
-    const Vec3f normal = world.planes.front().normal.cast<float>().normalized();
+    const Vec3f point = topology.planes.front().point.cast<float>();
+    const Vec3f normal = topology.planes.front().normal.cast<float>().normalized();
     const Eigen::AlignedBox3f bodies = bounds;
     for (int corner = 0; corner < 8; ++corner) {
       const Vec3f c = bodies.corner(Eigen::AlignedBox3f::CornerType(corner));
@@ -377,8 +374,9 @@ RenderScene makeRenderScene(const World& world, const RenderOptions& options) {
 
   Camera& camera = scene.camera;
   camera.fovDegrees = options.fovDegrees;
-  camera.up = world.planes.empty() ? Vec3f::UnitY()
-                                   : Vec3f(world.planes.front().normal.cast<float>().normalized());
+  camera.up = topology.planes.empty()
+                  ? Vec3f::UnitY()
+                  : Vec3f(topology.planes.front().normal.cast<float>().normalized());
   const Vec3f center = bounds.center();
   camera.target = options.cameraTarget.value_or(center);
   if (options.cameraPosition) {
@@ -445,12 +443,12 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
   gl.surfaceProgram = linkProgram(kSurfaceVertex, kSurfaceFragment);
   gl.groundProgram = linkProgram(kGroundVertex, kGroundFragment);
 
-  const World& world = scene_.topology;
-  for (const Body& body : world.bodies) {
+  const SceneTopology& topology = *scene_.topology;
+  for (const Body& body : topology.bodies) {
     std::vector<Index> indices;
     indices.reserve(std::size_t(body.triangleCount) * 3);
     for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t)
-      for (Index v : world.triangles[t]) indices.push_back(v - body.firstParticle);
+      for (Index v : topology.triangles[t]) indices.push_back(v - body.firstParticle);
     MeshBuffers buffers;
     buffers.create(std::vector<float>(std::size_t(body.particleCount) * 6, 0.0f), indices,
                    GL_DYNAMIC_DRAW);
@@ -459,7 +457,7 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
 
   std::vector<float> interleaved;
   std::vector<Index> indices;
-  for (const StaticMeshCollider& collider : world.staticMeshes) {
+  for (const StaticMeshCollider& collider : topology.staticMeshes) {
     const Index first = Index(interleaved.size() / 6);
     const std::vector<Vec3f> normals = meshNormals(collider.mesh);
     for (std::size_t i = 0; i < collider.mesh.positions.size(); ++i) {
@@ -489,9 +487,9 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
   glBindVertexArray(0);
 
   // The ground: one large quad on the first plane, centred under the scene.
-  if (!world.planes.empty()) {
-    const Vec3f normal = world.planes.front().normal.cast<float>().normalized();
-    const Vec3f point = world.planes.front().point.cast<float>();
+  if (!topology.planes.empty()) {
+    const Vec3f normal = topology.planes.front().normal.cast<float>().normalized();
+    const Vec3f point = topology.planes.front().point.cast<float>();
     const Vec3f center = 0.5f * (scene_.boundsMin + scene_.boundsMax);
     const Vec3f origin = center - normal * (center - point).dot(normal);
     const Vec3f u = perpendicular(normal), v = normal.cross(u);
@@ -557,10 +555,10 @@ FrameRenderer::~FrameRenderer() {
 }
 
 std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
-  const World& world = scene_.topology;
+  const SceneTopology& topology = *scene_.topology;
   const Camera& camera = scene_.camera;
-  if (!world.bodies.empty()) {
-    const Body& last = world.bodies.back();
+  if (!topology.bodies.empty()) {
+    const Body& last = topology.bodies.back();
     if (frame.positions.size() < std::size_t(last.firstParticle) + last.particleCount)
       throw Error(cat("renderer: frame ", frame.number, " has ", frame.positions.size(),
                       " positions, the scene has ", last.firstParticle + last.particleCount));
@@ -585,9 +583,9 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   // Bodies' positions and smooth normals for this frame, and their blob shadows.
   std::vector<float> shadows;
   const std::span<const Vec3> positions(frame.positions);
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    const Body& body = world.bodies[b];
-    computeSmoothNormals(world, positions, body, gl.normals);
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+    const Body& body = topology.bodies[b];
+    computeBodyNormals(topology, positions, body, gl.normals);
     gl.interleaved.resize(std::size_t(body.particleCount) * 6);
     Vec3d sum = Vec3d::Zero();
     for (Index i = 0; i < body.particleCount; ++i) {
@@ -625,7 +623,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
     glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
   }
   uniform(gl.surfaceProgram, "uSpecular", 0.25f);
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
     uniform(gl.surfaceProgram, "uColor", bodyColor(options_, b));
     glBindVertexArray(gl.bodies[b].vao);
     glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
@@ -640,7 +638,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
     glDisable(GL_POLYGON_OFFSET_FILL);
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     uniform(gl.surfaceProgram, "uFlat", 1);
-    for (std::size_t b = 0; b < world.bodies.size(); ++b) {
+    for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
       uniform(gl.surfaceProgram, "uColor", Vec3f(bodyColor(options_, b) * 0.3f));
       glBindVertexArray(gl.bodies[b].vao);
       glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
@@ -672,7 +670,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   }
 
   if (gl.ground.indexCount > 0) {
-    const PlaneCollider& planePoint = world.planes.front();
+    const PlaneCollider& planePoint = topology.planes.front();
     const Vec3f normal = planePoint.normal.cast<float>().normalized();
     const Vec3f u = perpendicular(normal), v = normal.cross(u);
     // Bold lines every power of ten below the scene's size, thin ones at a quarter of that.

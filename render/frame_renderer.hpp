@@ -16,7 +16,7 @@
 
 #include <Eigen/Core>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "render/egl_context.hpp"
 
@@ -55,24 +55,24 @@ Eigen::Matrix4f viewProjection(const Camera& camera, int width, int height);
 std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, int height,
                                               const Vec3f& point);
 
-/// What the renderer keeps of a World: body topology, static meshes, the ground, and the
-/// camera and sizes fixed once for the whole sequence. Built on any thread; holds no GL state.
+/// What the renderer draws besides the frame: the scene's topology (bodies, static meshes, the
+/// ground), and the camera and sizes fixed once for the whole sequence. Built on any thread;
+/// holds no GL state.
 struct RenderScene {
-  /// Bodies and triangles only (for computeSmoothNormals) plus the static meshes and planes;
-  /// the particle arrays are left empty.
-  World topology;
+  std::shared_ptr<const SceneTopology> topology;  ///< shared with the simulator, read-only
   Camera camera;
   Vec3f boundsMin = Vec3f::Zero(), boundsMax = Vec3f::Zero();  ///< the framed region
   float size = 1;                                              ///< diagonal of the framed region, m
   float contactRadius = 0;                                     ///< m
 };
 
-/// Copies what rendering needs from `world` (whose positions are the initial state) and fixes the
-/// camera. Automatic framing covers the bodies' initial bounds, the static meshes and the bodies'
-/// shadow on the first plane (where falling bodies end up), with a margin: frames arrive one by
-/// one, so the bounds of the whole animation are not known in advance, and a camera fitted per
-/// frame would jump. Throws softbake::Error for options out of range.
-RenderScene makeRenderScene(const World& world, const RenderOptions& options);
+/// Keeps `topology` and fixes the camera from its rest positions (the initial state). Automatic
+/// framing covers the bodies' initial bounds, the static meshes and the bodies' shadow on the first
+/// plane (where falling bodies end up), with a margin: frames arrive one by one, so the bounds of
+/// the whole animation are not known in advance, and a camera fitted per frame would jump. Throws
+/// softbake::Error for options out of range.
+RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> topology,
+                            const RenderOptions& options);
 
 /// The per-body colour of body `index`: golden-ratio hue steps at soft saturation, linear RGB.
 Vec3f bodyColor(std::size_t index);

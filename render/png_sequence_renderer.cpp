@@ -4,12 +4,12 @@
 
 namespace softbake {
 
-PngSequenceRenderer::PngSequenceRenderer(const World& world,
+PngSequenceRenderer::PngSequenceRenderer(std::shared_ptr<const SceneTopology> topology,
                                          const std::filesystem::path& outputDirectory,
                                          std::string scene, RenderOptions options, int framePadding)
     : outputDirectory_(outputDirectory),
       naming_{"png", std::move(scene), ".png", framePadding},
-      scene_(makeRenderScene(world, options)),
+      scene_(makeRenderScene(std::move(topology), options)),
       options_(std::move(options)) {
   makeDirectories(outputDirectory_ / naming_.folder);
 }

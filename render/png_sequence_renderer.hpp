@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "output/frame_naming.hpp"
 #include "output/manifest.hpp"
@@ -25,10 +25,11 @@ namespace softbake {
 
 class PngSequenceRenderer : public FrameSink {
  public:
-  /// Copies what it needs from `world` (its positions are the initial state, used to frame the
-  /// camera). Creates OUT/png. Throws softbake::Error; EGL errors come from the first write().
-  PngSequenceRenderer(const World& world, const std::filesystem::path& outputDirectory,
-                      std::string scene, RenderOptions options = {}, int framePadding = 4);
+  /// Keeps `topology` (its rest positions, the initial state, frame the camera). Creates
+  /// OUT/png. Throws softbake::Error; EGL errors come from the first write().
+  PngSequenceRenderer(std::shared_ptr<const SceneTopology> topology,
+                      const std::filesystem::path& outputDirectory, std::string scene,
+                      RenderOptions options = {}, int framePadding = 4);
   ~PngSequenceRenderer() override;
 
   void write(const Frame& frame) override;

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "core/collision/sbhash_broad_phase.hpp"
 #include "core/collision/bvh_broad_phase.hpp"
+#include "core/collision/sbhash_broad_phase.hpp"
 #include "core/collision/spatial_hash_broad_phase.hpp"
 
 namespace softbake {
@@ -39,9 +39,14 @@ std::string_view broadPhaseName(BroadPhaseKind kind) {
   return "unknown";
 }
 
+std::vector<std::string> broadPhaseNames() {
+  std::vector<std::string> names;
+  for (BroadPhaseKind kind : kBroadPhaseKinds) names.emplace_back(broadPhaseName(kind));
+  return names;
+}
+
 bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind) {
-  for (BroadPhaseKind candidate : {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
-                                   BroadPhaseKind::Bvh, BroadPhaseKind::BruteForce}) {
+  for (BroadPhaseKind candidate : kBroadPhaseKinds) {
     if (broadPhaseName(candidate) == name) {
       kind = candidate;
       return true;

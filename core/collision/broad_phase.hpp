@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -53,8 +54,15 @@ enum class BroadPhaseKind {
   BruteForce,   ///< every pair ("brute"): the reference
 };
 
+/// Every kind, in the order the command line and the scene format list them.
+inline constexpr BroadPhaseKind kBroadPhaseKinds[] = {
+    BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash, BroadPhaseKind::Bvh,
+    BroadPhaseKind::BruteForce};
+
 /// "sbhash", "spatialhash", "bvh", "brute".
 std::string_view broadPhaseName(BroadPhaseKind kind);
+/// The names of kBroadPhaseKinds, in order: what the command line and the scene parser accept.
+std::vector<std::string> broadPhaseNames();
 /// The kind a name gives, or false for an unknown name.
 bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind);
 
@@ -74,8 +82,8 @@ class BroadPhase {
 std::unique_ptr<BroadPhase> makeBroadPhase(BroadPhaseKind kind,
                                            const BroadPhaseOptions& options = {});
 
-/// What the broad phases share (core/collision/broad_phase.cpp), so each states the output contract once.
-/// For implementers of BroadPhase, not for callers.
+/// What the broad phases share (core/collision/broad_phase.cpp), so each states the output contract
+/// once. For implementers of BroadPhase, not for callers.
 namespace broad_phase_detail {
 
 /// Appends (min, max) of i ≠ j when their boxes overlap and pairEligible allows them. The box

@@ -5,7 +5,8 @@
 
 #include <algorithm>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 
 namespace softbake {
 
@@ -14,15 +15,11 @@ constexpr std::size_t kPairGrain = 256;
 /// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
 constexpr std::size_t kParticleChunks = 128;
 
-TriangleCorners corners(const World& world, Index triangle) {
-  const Triangle& t = world.collision.triangleVertices[triangle];
-  return {collisionVertex(world, t[0]), collisionVertex(world, t[1]), collisionVertex(world, t[2])};
-}
-
-const Vec3& previousCollisionVertex(const World& world, Index v) {
-  return v < world.collision.particleCount
-             ? world.previousPosition[v]
-             : world.collision.staticVertex[v - world.collision.particleCount];
+TriangleCorners corners(const CollisionGeometry& geometry, std::span<const Vec3> positions,
+                        Index triangle) {
+  const Triangle& t = geometry.triangleVertices[triangle];
+  return {geometry.vertex(positions, t[0]), geometry.vertex(positions, t[1]),
+          geometry.vertex(positions, t[2])};
 }
 
 bool hasVertex(const Triangle& t, Index v) {
@@ -43,11 +40,13 @@ struct ParticleTarget {
   Vec3 normal;  ///< unnormalised, as intersectSegmentTriangle computes it
 };
 
-ParticleTarget particleTarget(const World& world, Index triangle) {
-  const Triangle& t = world.collision.triangleVertices[triangle];
-  ParticleTarget target{triangle, corners(world, triangle), Vec3::Zero(), Vec3::Zero()};
+ParticleTarget particleTarget(const CollisionGeometry& geometry, const SubstepMotion& motion,
+                              Index triangle) {
+  const Triangle& t = geometry.triangleVertices[triangle];
+  ParticleTarget target{triangle, corners(geometry, motion.end, triangle), Vec3::Zero(),
+                        Vec3::Zero()};
   Vec3 displacement = Vec3::Zero();
-  for (int k = 0; k < 3; ++k) displacement += target.now[k] - previousCollisionVertex(world, t[k]);
+  for (int k = 0; k < 3; ++k) displacement += target.now[k] - geometry.vertex(motion.start, t[k]);
   target.shift = displacement / Scalar(3);
   target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
   return target;
@@ -56,22 +55,21 @@ ParticleTarget particleTarget(const World& world, Index triangle) {
 /// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
 /// it): intersectSegmentTriangle's own first rejection, computed the same way, so skipping the
 /// test then changes nothing. Most candidates end here.
-bool mayCross(const World& world, Index p, const ParticleTarget& target) {
-  const Vec3 start = world.previousPosition[p] + target.shift;
+bool mayCross(const SubstepMotion& motion, Index p, const ParticleTarget& target) {
+  const Vec3 start = motion.start[p] + target.shift;
   const Scalar startSide = target.normal.dot(start - target.now[0]);
-  const Scalar endSide = target.normal.dot(world.position[p] - target.now[0]);
+  const Scalar endSide = target.normal.dot(motion.end[p] - target.now[0]);
   return !((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
          startSide != endSide;
 }
 
 /// Tests particle p's motion against the target triangle.
-bool testParticle(const World& world, Index p, const ParticleTarget& target,
-                  ParticleContact& contact) {
-  const CollisionGeometry& geometry = world.collision;
+bool testParticle(const CollisionGeometry& geometry, const SubstepMotion& motion, Index p,
+                  const ParticleTarget& target, ParticleContact& contact) {
   const Index triangle = target.triangle;
   const TriangleCorners& now = target.now;
-  const Vec3 start = world.previousPosition[p] + target.shift;
-  const Vec3& end = world.position[p];
+  const Vec3 start = motion.start[p] + target.shift;
+  const Vec3& end = motion.end[p];
   if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit)) return false;
 
   const Vec3& normal = target.normal;
@@ -92,33 +90,37 @@ bool testParticle(const World& world, Index p, const ParticleTarget& target,
 }
 }  // namespace
 
-const Vec3& collisionVertex(const World& world, Index v) {
-  return v < world.collision.particleCount
-             ? world.position[v]
-             : world.collision.staticVertex[v - world.collision.particleCount];
-}
-
 CollisionDetector::CollisionDetector(const CollisionSettings& settings)
     : broadPhase_(
           makeBroadPhase(settings.broadPhase, {.subdivisionLevels = settings.subdivisionLevels})) {
   if (settings.pairCache) pairCache_.emplace();
 }
 
-void CollisionDetector::detect(const World& world, StageClock* clock) {
-  const CollisionGeometry& geometry = world.collision;
+void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
+                               StageClock* clock) {
+  const CollisionGeometry& geometry = topology.collision;
+  updateCollisionBoxes(topology, motion, boxes_);
+  if (clock) clock->lap(Stage::Boxes);
   if (pairCache_)
-    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(), pairs_);
+    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_), pairs_);
   else
-    broadPhase_->findPairs(geometry.broadPhaseInput(), pairs_);
+    broadPhase_->findPairs(geometry.broadPhaseInput(boxes_), pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
+  findEdgeContacts(geometry, motion.end);
+  findParticleContacts(topology, motion);
+  if (clock) clock->lap(Stage::NarrowPhase);
+}
 
-  // Edge contacts: the multi-pass test on every candidate pair, one slot per pair.
+/// The multi-pass test on every candidate pair, one slot per pair.
+void CollisionDetector::findEdgeContacts(const CollisionGeometry& geometry,
+                                         std::span<const Vec3> positions) {
   pairHits_.resize(pairs_.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs_.size(), kPairGrain),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i)
-                        intersectTrianglePair(corners(world, pairs_[i].first),
-                                              corners(world, pairs_[i].second), pairHits_[i]);
+                        intersectTrianglePair(corners(geometry, positions, pairs_[i].first),
+                                              corners(geometry, positions, pairs_[i].second),
+                                              pairHits_[i]);
                     });
   edgeContacts_.clear();
   for (std::size_t i = 0; i < pairs_.size(); ++i) {
@@ -130,22 +132,26 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
       edgeContacts_.push_back(
           {pairs_[i].second, pairs_[i].first, hits.secondEdges[k].edge, hits.secondEdges[k].hit});
   }
+}
 
-  // Particle contacts: every free particle of one triangle of a pair against the other triangle.
+void CollisionDetector::findParticleContacts(const SceneTopology& topology,
+                                             const SubstepMotion& motion) {
+  const CollisionGeometry& geometry = topology.collision;
+  // Every free particle of one triangle of a pair against the other triangle.
   // A particle belongs to several triangles, so the same (particle, triangle) comes from several
   // pairs. It is tested once, from the first triangle of the particle's incidence row that the
   // broad phase pairs with the target: every broad phase lists exactly the eligible pairs whose
   // boxes overlap, so that triangle is known locally, by a few box tests, with no sort of all
   // candidates (that was a quarter of a contact-heavy step). The pairs are tested in parallel
   // chunks, and only the few hits are sorted, so the result is the same for any thread count.
-  const BroadPhaseInput input = geometry.broadPhaseInput();
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
   const auto testsFrom = [&](Index from, Index p, Index against) {
-    const Box3& target = geometry.triangleBox[against];
-    for (Index r = world.triangleRowStart[p]; r < world.triangleRowStart[p + 1]; ++r) {
-      const Index u = world.triangleRefs[r];
+    const Box3& target = boxes_[against];
+    for (Index r = topology.triangleRowStart[p]; r < topology.triangleRowStart[p + 1]; ++r) {
+      const Index u = topology.triangleRefs[r];
       if (u == from) return true;  // paired with `against`: that is how we got here
       // u's surface is from's, which moves, so a pair with another surface is always eligible.
-      if (geometry.triangleBox[u].intersects(target) &&
+      if (boxes_[u].intersects(target) &&
           (geometry.triangleSurface[u] != geometry.triangleSurface[against] ||
            pairEligible(input, u, against)))
         return false;
@@ -162,10 +168,10 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
     auto testCorners = [&](Index from, Index against) {
       if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
       const Triangle& struck = geometry.triangleVertices[against];
-      const ParticleTarget target = particleTarget(world, against);
+      const ParticleTarget target = particleTarget(geometry, motion, against);
       for (Index p : geometry.triangleVertices[from])
-        if (world.inverseMass[p] != 0 && !hasVertex(struck, p) && mayCross(world, p, target) &&
-            testsFrom(from, p, against) && testParticle(world, p, target, contact))
+        if (topology.inverseMass[p] != 0 && !hasVertex(struck, p) && mayCross(motion, p, target) &&
+            testsFrom(from, p, against) && testParticle(geometry, motion, p, target, contact))
           hits.push_back(contact);
     };
     const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
@@ -196,7 +202,6 @@ void CollisionDetector::detect(const World& world, StageClock* clock) {
       particleContacts_[j] = particleContacts_[j - 1];
     particleContacts_[j] = contact;
   }
-  if (clock) clock->lap(Stage::NarrowPhase);
 }
 
 }  // namespace softbake

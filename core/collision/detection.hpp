@@ -9,18 +9,21 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
+#include "core/collision/geometry.hpp"
 #include "core/collision/line_triangle.hpp"
 #include "core/collision/pair_cache.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/stage_timer.hpp"
-#include "core/collision/triangle_pair_intersection.hpp"
 
 namespace softbake {
 
-struct World;
+struct SceneTopology;
+struct SubstepMotion;
 
 /// An edge of `edgeTriangle` crossing `triangle`.
 struct EdgeContact {
@@ -37,17 +40,15 @@ struct ParticleContact {
   Vec3 normal;  ///< unit normal of the triangle, pointing to the side the particle came from
 };
 
-/// The position of collision vertex `v`: a particle, or a static mesh vertex.
-const Vec3& collisionVertex(const World& world, Index v);
-
 class CollisionDetector {
  public:
   explicit CollisionDetector(const CollisionSettings& settings);
 
-  /// Finds the contacts of the substep that just moved the particles from previousPosition to
-  /// position. Expects updateCollisionBoxes() to have run.
-  /// `clock`, when given, gets a BroadPhase lap after the pairs and a NarrowPhase lap at the end.
-  void detect(const World& world, StageClock* clock = nullptr);
+  /// Finds the contacts of the substep that just moved the particles of `topology` from
+  /// motion.start to motion.end: refreshes the triangle boxes, runs the broad phase, then the
+  /// narrow phase. `clock`, when given, gets a Boxes, a BroadPhase and a NarrowPhase lap.
+  void detect(const SceneTopology& topology, const SubstepMotion& motion,
+              StageClock* clock = nullptr);
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sorted by candidate pair, then direction and edge.
@@ -55,8 +56,14 @@ class CollisionDetector {
   /// Sorted by particle, then by when the particle crossed (t), then by triangle.
   const std::vector<ParticleContact>& particleContacts() const { return particleContacts_; }
   BroadPhaseKind broadPhase() const { return broadPhase_->kind(); }
+  /// This substep's box of every collision triangle.
+  std::span<const Box3> triangleBoxes() const { return boxes_; }
 
  private:
+  void findEdgeContacts(const CollisionGeometry& geometry, std::span<const Vec3> positions);
+  void findParticleContacts(const SceneTopology& topology, const SubstepMotion& motion);
+
+  std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::unique_ptr<BroadPhase> broadPhase_;
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;

@@ -6,6 +6,7 @@
 /// particles. So a collision triangle, a surface or a vertex is one integer everywhere in the
 /// pipeline, and the broad phases need no notion of "soft" or "static".
 
+#include <span>
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
@@ -14,31 +15,38 @@
 
 namespace softbake {
 
-struct World;
+struct SceneTopology;
+struct SubstepMotion;
 
 struct CollisionGeometry {
   std::vector<CollisionSurface> surfaces;
   std::vector<Triangle> triangleVertices;  ///< soft: particle indices; static: particleCount + i
   std::vector<Index> triangleSurface;
-  std::vector<Box3> triangleBox;              ///< soft boxes are refreshed every substep
   std::vector<Vec3> staticVertex;             ///< static mesh vertices, world space
   std::vector<Scalar> restitution, friction;  ///< per surface
   std::vector<bool> surfaceClosed;            ///< per surface: has an inside (edge pushes use it)
   Index particleCount = 0;                    ///< first static vertex index
   Index softTriangleCount = 0;                ///< first static triangle index
 
-  BroadPhaseInput broadPhaseInput() const {
+  /// The position of collision vertex `v`: particle v of `positions`, or a static mesh vertex.
+  const Vec3& vertex(std::span<const Vec3> positions, Index v) const {
+    return v < particleCount ? positions[v] : staticVertex[v - particleCount];
+  }
+  /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle).
+  BroadPhaseInput broadPhaseInput(std::span<const Box3> triangleBox) const {
     return {triangleBox, triangleVertices, triangleSurface, surfaces};
   }
 };
 
-/// Fills world.collision from the world's bodies and static mesh colliders (welded, so triangles
-/// that touch share vertices). Called by buildWorld().
-void buildCollisionGeometry(World& world);
+/// The collision geometry of the topology's bodies and static mesh colliders (welded, so
+/// triangles that touch share vertices). Called by buildSceneTopology().
+CollisionGeometry buildCollisionGeometry(const SceneTopology& topology);
 
-/// Refreshes the soft triangles' boxes: each covers its corners at the start and the end of the
-/// substep (previousPosition and position), so it holds every particle's segment of the step,
-/// inflated by the skin so resting contacts stay candidates.
-void updateCollisionBoxes(World& world);
+/// Refreshes `boxes`, one per collision triangle: each soft triangle's box covers its corners at
+/// the start and the end of the substep, so it holds every particle's segment of the step,
+/// inflated by the skin so resting contacts stay candidates. Static triangles' boxes are computed
+/// when `boxes` does not have the right size yet, and kept after that.
+void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
+                          std::vector<Box3>& boxes);
 
 }  // namespace softbake

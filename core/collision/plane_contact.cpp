@@ -37,17 +37,18 @@ bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, 
 }
 }  // namespace
 
-std::size_t resolvePlaneContacts(World& world, bool respond) {
-  if (world.planes.empty()) return 0;
-  const Scalar skin = world.settings.skin;
+std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const Vec3> substepStart,
+                                 SimulationState& state, bool respond) {
+  if (topology.planes.empty()) return 0;
+  const Scalar skin = topology.settings.skin;
   return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, world.particleCount(), kParticleGrain), std::size_t(0),
+      tbb::blocked_range<std::size_t>(0, state.particleCount(), kParticleGrain), std::size_t(0),
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t moved) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          if (world.inverseMass[i] == 0) continue;
-          for (const PlaneCollider& plane : world.planes)
-            moved += respondToPlane(plane, skin, world.previousPosition[i], world.position[i],
-                                    world.velocity[i], respond);
+          if (topology.inverseMass[i] == 0) continue;
+          for (const PlaneCollider& plane : topology.planes)
+            moved += respondToPlane(plane, skin, substepStart[i], state.position[i],
+                                    state.velocity[i], respond);
         }
         return moved;
       },

@@ -2,15 +2,17 @@
 /// Contact with static infinite planes (the ground): the paper's case-1 response (§2.4) for a
 /// surface whose normal is the same everywhere.
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 
 namespace softbake {
 
-/// For every particle whose motion this substep crossed a plane, or that ends closer than the skin:
-/// moves it to where its segment met the plane (or projects it), lifted by the skin along the
-/// normal; reflects the normal velocity with the plane's restitution and slows the tangential
-/// velocity by Coulomb friction. Returns the number of particles in contact. With `respond`
-/// false (detection only, the paper's figure 5b) nothing is moved.
-std::size_t resolvePlaneContacts(World& world, bool respond = true);
+/// For every particle whose motion this substep (from `substepStart`) crossed a plane, or that ends
+/// closer than the skin: moves it to where its segment met the plane (or projects it), lifted by
+/// the skin along the normal; reflects the normal velocity with the plane's restitution and slows
+/// the tangential velocity by Coulomb friction. Returns the number of particles in contact. With
+/// `respond` false (detection only, the paper's figure 5b) nothing is moved.
+std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const Vec3> substepStart,
+                                 SimulationState& state, bool respond = true);
 
 }  // namespace softbake

@@ -3,11 +3,22 @@
 #include <algorithm>
 #include <array>
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 
 namespace softbake {
 
 namespace {
+
+/// What the response reads (the topology) and moves (the state).
+struct ResponseScene {
+  const SceneTopology& topology;
+  SimulationState& state;
+  const CollisionGeometry& geometry = topology.collision;
+  const Scalar skin =
+      topology.settings.skin;  ///< left between a responding particle and the surface
+  const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
+};
 
 /// The surface side of a contact: up to two triangles' corners with their weights.
 struct StruckPoint {
@@ -22,18 +33,17 @@ struct StruckPoint {
   }
 };
 
-Scalar inverseMass(const World& world, Index v) {
-  return v < world.collision.particleCount ? world.inverseMass[v] : Scalar(0);
+Scalar inverseMass(const ResponseScene& scene, Index v) {
+  return v < scene.geometry.particleCount ? scene.topology.inverseMass[v] : Scalar(0);
 }
 
-Vec3 velocity(const World& world, Index v) {
-  return v < world.collision.particleCount ? world.velocity[v] : Vec3::Zero();
+Vec3 velocity(const ResponseScene& scene, Index v) {
+  return v < scene.geometry.particleCount ? scene.state.velocity[v] : Vec3::Zero();
 }
 
-Vec3 unitNormal(const World& world, Index triangle) {
-  const Triangle& t = world.collision.triangleVertices[triangle];
-  const Vec3 &a = collisionVertex(world, t[0]), &b = collisionVertex(world, t[1]),
-             &c = collisionVertex(world, t[2]);
+Vec3 unitNormal(const ResponseScene& scene, Index triangle) {
+  const Triangle& t = scene.geometry.triangleVertices[triangle];
+  const Vec3 &a = scene.vertex(t[0]), &b = scene.vertex(t[1]), &c = scene.vertex(t[2]);
   return (b - a).cross(c - a).normalized();
 }
 
@@ -42,22 +52,22 @@ Vec3 unitNormal(const World& world, Index triangle) {
 /// invA/k of each change and corner i of the struck side −wᵢ·invBᵢ/k, with
 /// k = invA + Σ wᵢ²·invBᵢ, which gives the whole change at the contact point and leaves the total
 /// momentum unchanged. In the paper's mode the struck side has no share (invB = 0).
-bool correct(World& world, Index p, const StruckPoint& struck, const Vec3& shift,
+bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, const Vec3& shift,
              const Vec3& normal, Scalar restitution, Scalar friction, ResponseMode mode) {
-  const Scalar invA = inverseMass(world, p);
+  const Scalar invA = inverseMass(scene, p);
   std::array<Scalar, 6> invB{};
   Scalar k = invA;
   for (int i = 0; i < struck.count; ++i) {
-    invB[i] = mode == ResponseMode::Paper ? Scalar(0) : inverseMass(world, struck.vertex[i]);
+    invB[i] = mode == ResponseMode::Paper ? Scalar(0) : inverseMass(scene, struck.vertex[i]);
     k += struck.weight[i] * struck.weight[i] * invB[i];
   }
   if (!(k > 0)) return false;
 
   Vec3 surfaceVelocity = Vec3::Zero();
   for (int i = 0; i < struck.count; ++i)
-    surfaceVelocity += struck.weight[i] * velocity(world, struck.vertex[i]);
+    surfaceVelocity += struck.weight[i] * velocity(scene, struck.vertex[i]);
   const Vec3 relative =
-      (p < world.collision.particleCount ? world.velocity[p] : Vec3::Zero()) - surfaceVelocity;
+      (p < scene.geometry.particleCount ? scene.state.velocity[p] : Vec3::Zero()) - surfaceVelocity;
   const Scalar normalSpeed = relative.dot(normal);
   Vec3 velocityChange = Vec3::Zero();
   if (normalSpeed < 0) {
@@ -70,24 +80,23 @@ bool correct(World& world, Index p, const StruckPoint& struck, const Vec3& shift
   }
 
   if (invA > 0) {
-    world.position[p] += (invA / k) * shift;
-    world.velocity[p] += (invA / k) * velocityChange;
+    scene.state.position[p] += (invA / k) * shift;
+    scene.state.velocity[p] += (invA / k) * velocityChange;
   }
   for (int i = 0; i < struck.count; ++i) {
     if (invB[i] == 0) continue;
     const Index v = struck.vertex[i];
     const Scalar share = struck.weight[i] * invB[i] / k;
-    world.position[v] -= share * shift;
-    world.velocity[v] -= share * velocityChange;
+    scene.state.position[v] -= share * shift;
+    scene.state.velocity[v] -= share * velocityChange;
   }
   return true;
 }
 
 /// Where the struck point is now: earlier responses of the substep may have moved its corners.
-Vec3 pointOn(const World& world, const StruckPoint& struck) {
+Vec3 pointOn(const ResponseScene& scene, const StruckPoint& struck) {
   Vec3 point = Vec3::Zero();
-  for (int i = 0; i < struck.count; ++i)
-    point += struck.weight[i] * collisionVertex(world, struck.vertex[i]);
+  for (int i = 0; i < struck.count; ++i) point += struck.weight[i] * scene.vertex(struck.vertex[i]);
   return point;
 }
 
@@ -119,8 +128,14 @@ std::string_view responseModeName(ResponseMode mode) {
   return "two-sided";
 }
 
+std::vector<std::string> responseModeNames() {
+  std::vector<std::string> names;
+  for (ResponseMode mode : kResponseModes) names.emplace_back(responseModeName(mode));
+  return names;
+}
+
 bool parseResponseMode(std::string_view name, ResponseMode& mode) {
-  for (ResponseMode candidate : {ResponseMode::TwoSided, ResponseMode::Paper, ResponseMode::None})
+  for (ResponseMode candidate : kResponseModes)
     if (name == responseModeName(candidate)) {
       mode = candidate;
       return true;
@@ -128,15 +143,14 @@ bool parseResponseMode(std::string_view name, ResponseMode& mode) {
   return false;
 }
 
-CollisionResponseStats respondToCollisions(World& world, const CollisionDetector& detector,
-                                           ResponseMode mode, std::vector<Contact>& contacts) {
-  const CollisionGeometry& geometry = world.collision;
-  const Scalar skin = world.settings.skin;
-  const bool respond = mode != ResponseMode::None;
-  CollisionResponseStats stats;
-  contacts.clear();
+namespace {
 
-  const std::vector<ParticleContact>& hits = detector.particleContacts();
+/// Case 1 or case 2 per particle, from its hits (sorted by particle, earliest crossing first).
+void respondToParticleContacts(const ResponseScene& scene, const std::vector<ParticleContact>& hits,
+                               ResponseMode mode, std::vector<Contact>& contacts,
+                               CollisionResponseStats& stats) {
+  const CollisionGeometry& geometry = scene.geometry;
+  const bool respond = mode != ResponseMode::None;
   for (std::size_t begin = 0; begin < hits.size();) {
     const Index p = hits[begin].particle;
     std::size_t end = begin + 1;
@@ -149,7 +163,7 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
 
     const Index surfaceB = geometry.triangleSurface[first.triangle];
     Contact contact;
-    contact.surfaceA = world.particleBody[p];
+    contact.surfaceA = scene.topology.particleBody[p];
     contact.surfaceB = surfaceB;
     contact.triangleB = first.triangle;
     contact.particle = p;
@@ -158,8 +172,9 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
     if (second) {
       contact.kind = ContactKind::Corner;
       contact.normal = (first.normal + second->normal).normalized();
-      contact.position = closestPointOnPlaneIntersection(
-          first.normal, first.hit.point, second->normal, second->hit.point, world.position[p]);
+      contact.position =
+          closestPointOnPlaneIntersection(first.normal, first.hit.point, second->normal,
+                                          second->hit.point, scene.state.position[p]);
       struck.add(geometry.triangleVertices[first.triangle], first.hit.barycentric, Scalar(0.5));
       struck.add(geometry.triangleVertices[second->triangle], second->hit.barycentric, Scalar(0.5));
       ++stats.cornerResponses;
@@ -170,20 +185,27 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
       struck.add(geometry.triangleVertices[first.triangle], first.hit.barycentric, 1);
       ++stats.particleResponses;
     }
-    target = contact.position + skin * contact.normal;
+    target = contact.position + scene.skin * contact.normal;
     contacts.push_back(contact);
     if (respond)
-      correct(world, p, struck, target - world.position[p], contact.normal,
+      correct(scene, p, struck, target - scene.state.position[p], contact.normal,
               geometry.restitution[surfaceB], geometry.friction[surfaceB], mode);
   }
+}
 
-  for (const EdgeContact& edge : detector.edgeContacts()) {
+/// Records every edge contact; pushes an edge's end that lies inside a closed surface back out.
+void respondToEdgeContacts(const ResponseScene& scene, const std::vector<EdgeContact>& edges,
+                           ResponseMode mode, std::vector<Contact>& contacts,
+                           CollisionResponseStats& stats) {
+  const CollisionGeometry& geometry = scene.geometry;
+  const bool respond = mode != ResponseMode::None;
+  for (const EdgeContact& edge : edges) {
     const Index surfaceA = geometry.triangleSurface[edge.edgeTriangle];
     const Index surfaceB = geometry.triangleSurface[edge.triangle];
     Contact contact;
     contact.kind = ContactKind::EdgeTriangle;
     contact.position = edge.hit.point;
-    contact.normal = unitNormal(world, edge.triangle);
+    contact.normal = unitNormal(scene, edge.triangle);
     contact.surfaceA = surfaceA;
     contact.surfaceB = surfaceB;
     contact.triangleA = edge.edgeTriangle;
@@ -198,28 +220,38 @@ CollisionResponseStats respondToCollisions(World& world, const CollisionDetector
     const Index ends[2] = {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]};
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
-    const Vec3 normal = unitNormal(world, edge.triangle);
-    const Vec3 facePoint = pointOn(world, struck);
+    const Vec3 normal = unitNormal(scene, edge.triangle);
+    const Vec3 facePoint = pointOn(scene, struck);
     // Only an end near the face can be inside the body through it: a long edge (a big static
     // triangle under a small body) crosses the face with its ends far outside the body, behind
     // the face's plane but not behind the face. Near: within the face's longest side.
     const Triangle& face = geometry.triangleVertices[edge.triangle];
     Scalar faceSize = 0;
     for (int k = 0; k < 3; ++k)
-      faceSize = std::max(
-          faceSize,
-          (collisionVertex(world, face[(k + 1) % 3]) - collisionVertex(world, face[k])).norm());
-    const Scalar edgeLength =
-        (collisionVertex(world, ends[1]) - collisionVertex(world, ends[0])).norm();
+      faceSize =
+          std::max(faceSize, (scene.vertex(face[(k + 1) % 3]) - scene.vertex(face[k])).norm());
+    const Scalar edgeLength = (scene.vertex(ends[1]) - scene.vertex(ends[0])).norm();
     const Scalar maxPush = kMaxEdgePush * edgeLength;
     for (Index end : ends) {
-      const Scalar depth = normal.dot(collisionVertex(world, end) - facePoint);
-      if (depth >= 0 || (collisionVertex(world, end) - facePoint).norm() > faceSize) continue;
-      if (correct(world, end, struck, std::min(skin - depth, maxPush) * normal, normal,
+      const Scalar depth = normal.dot(scene.vertex(end) - facePoint);
+      if (depth >= 0 || (scene.vertex(end) - facePoint).norm() > faceSize) continue;
+      if (correct(scene, end, struck, std::min(scene.skin - depth, maxPush) * normal, normal,
                   geometry.restitution[surfaceB], geometry.friction[surfaceB], mode))
         ++stats.edgePushes;
     }
   }
+}
+
+}  // namespace
+
+CollisionResponseStats respondToCollisions(const SceneTopology& topology,
+                                           const CollisionDetector& detector, ResponseMode mode,
+                                           SimulationState& state, std::vector<Contact>& contacts) {
+  const ResponseScene scene{topology, state};
+  CollisionResponseStats stats;
+  contacts.clear();
+  respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);
+  respondToEdgeContacts(scene, detector.edgeContacts(), mode, contacts, stats);
   return stats;
 }
 

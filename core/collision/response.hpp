@@ -21,13 +21,14 @@
 
 #include <vector>
 
-#include "core/collision/detection.hpp"
 #include "core/collision/contact.hpp"
+#include "core/collision/detection.hpp"
 #include "core/scene/scene_setup.hpp"
 
 namespace softbake {
 
-struct World;
+struct SceneTopology;
+struct SimulationState;
 
 struct CollisionResponseStats {
   std::size_t particleResponses = 0;  ///< case 1
@@ -49,7 +50,8 @@ constexpr Scalar kMaxEdgePush = Scalar(0.1);
 
 /// Writes this substep's contacts to `contacts` (replacing what was there) and, unless `mode` is
 /// ResponseMode::None, moves the particles and sets their velocities as described above.
-CollisionResponseStats respondToCollisions(World& world, const CollisionDetector& detector,
-                                           ResponseMode mode, std::vector<Contact>& contacts);
+CollisionResponseStats respondToCollisions(const SceneTopology& topology,
+                                           const CollisionDetector& detector, ResponseMode mode,
+                                           SimulationState& state, std::vector<Contact>& contacts);
 
 }  // namespace softbake

@@ -13,12 +13,23 @@ constexpr std::size_t kSpringGrain = 4096;
 constexpr std::size_t kTriangleGrain = 4096;
 }  // namespace
 
-void computeSpringForces(World& world) {
-  const Spring* springs = world.springs.data();
-  const Vec3* x = world.position.data();
-  const Vec3* v = world.velocity.data();
-  Vec3* out = world.springForce.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, world.springs.size(), kSpringGrain),
+ForceBuffers::ForceBuffers(const SceneTopology& topology)
+    : springForce(topology.springs.size(), Vec3::Zero()),
+      triangleForce(topology.triangles.size(), Vec3::Zero()),
+      chunkVolume(topology.volumeChunks.size(), 0.0),
+      bodyVolume(topology.bodies.size(), 0.0),
+      bodyPressure(topology.bodies.size(), 0) {
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b)
+    bodyVolume[b] = topology.bodies[b].restVolume;
+}
+
+void computeSpringForces(const SceneTopology& topology, const SimulationState& state,
+                         ForceBuffers& forces) {
+  const Spring* springs = topology.springs.data();
+  const Vec3* x = state.position.data();
+  const Vec3* v = state.velocity.data();
+  Vec3* out = forces.springForce.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.springs.size(), kSpringGrain),
                     [=](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t s = range.begin(); s != range.end(); ++s) {
                         const Spring& spring = springs[s];
@@ -30,18 +41,20 @@ void computeSpringForces(World& world) {
                         }
                         const Vec3 axis = d / length;
                         const Scalar stretch = spring.stiffness * (length - spring.restLength);
-                        const Scalar closing = spring.damping * (v[spring.b] - v[spring.a]).dot(axis);
+                        const Scalar closing =
+                            spring.damping * (v[spring.b] - v[spring.a]).dot(axis);
                         out[s] = (stretch + closing) * axis;
                       }
                     });
 }
 
-void computeVolumes(World& world) {
-  const TriangleChunk* chunks = world.volumeChunks.data();
-  const Triangle* triangles = world.triangles.data();
-  const Vec3* x = world.position.data();
-  double* chunkVolume = world.chunkVolume.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, world.volumeChunks.size(), 1),
+void computeVolumes(const SceneTopology& topology, const SimulationState& state,
+                    ForceBuffers& forces) {
+  const TriangleChunk* chunks = topology.volumeChunks.data();
+  const Triangle* triangles = topology.triangles.data();
+  const Vec3* x = state.position.data();
+  double* chunkVolume = forces.chunkVolume.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.volumeChunks.size(), 1),
                     [=](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t c = range.begin(); c != range.end(); ++c) {
                         double sum = 0;
@@ -54,28 +67,30 @@ void computeVolumes(World& world) {
                         chunkVolume[c] = sum;
                       }
                     });
-  std::fill(world.bodyVolume.begin(), world.bodyVolume.end(), 0.0);
-  for (std::size_t c = 0; c < world.volumeChunks.size(); ++c)
-    world.bodyVolume[chunks[c].body] += chunkVolume[c] / 6.0;
+  std::fill(forces.bodyVolume.begin(), forces.bodyVolume.end(), 0.0);
+  for (std::size_t c = 0; c < topology.volumeChunks.size(); ++c)
+    forces.bodyVolume[chunks[c].body] += chunkVolume[c] / 6.0;
 }
 
-void computePressureForces(World& world) {
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    const Body& body = world.bodies[b];
-    const double volume = std::max(world.bodyVolume[b], kMinVolumeFraction * body.restVolume);
-    world.bodyPressure[b] = body.gasAmount > 0 ? Scalar(body.gasAmount / volume) : Scalar(0);
+void computePressureForces(const SceneTopology& topology, const SimulationState& state,
+                           ForceBuffers& forces) {
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+    const Body& body = topology.bodies[b];
+    const double volume = std::max(forces.bodyVolume[b], kMinVolumeFraction * body.restVolume);
+    forces.bodyPressure[b] = body.gasAmount > 0 ? Scalar(body.gasAmount / volume) : Scalar(0);
   }
-  const Triangle* triangles = world.triangles.data();
-  const Vec3* x = world.position.data();
-  const Index* body = world.particleBody.data();
-  const Scalar* pressure = world.bodyPressure.data();
-  Vec3* out = world.triangleForce.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, world.triangles.size(), kTriangleGrain),
+  const Triangle* triangles = topology.triangles.data();
+  const Vec3* x = state.position.data();
+  const Index* body = topology.particleBody.data();
+  const Scalar* pressure = forces.bodyPressure.data();
+  Vec3* out = forces.triangleForce.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.triangles.size(), kTriangleGrain),
                     [=](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t t = range.begin(); t != range.end(); ++t) {
                         const Triangle& tri = triangles[t];
                         const Scalar p = pressure[body[tri[0]]];
-                        // (b−a)×(c−a) is twice the area times the outward normal: P·A·n̂/3 per corner.
+                        // (b−a)×(c−a) is twice the area times the outward normal: P·A·n̂/3 per
+                        // corner.
                         out[t] = (p / 6) * (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]);
                       }
                     });

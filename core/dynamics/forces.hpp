@@ -1,23 +1,40 @@
 #pragma once
 /// Internal forces of the soft bodies (the paper's §1.1): springs and Matyka–Ollila gas pressure.
-/// Each function writes per-spring or per-triangle results into World's scratch arrays; the
+/// Each function writes per-spring or per-triangle results into the stage's ForceBuffers; the
 /// integrator gathers them per particle.
 
-#include "core/scene/world.hpp"
+#include <vector>
+
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 
 namespace softbake {
 
+/// The force stage's scratch, sized once for a topology: a step allocates nothing.
+struct ForceBuffers {
+  explicit ForceBuffers(const SceneTopology& topology);
+
+  std::vector<Vec3> springForce;     ///< force on each spring's `a` end
+  std::vector<Vec3> triangleForce;   ///< pressure force on each corner of each triangle
+  std::vector<double> chunkVolume;   ///< per TriangleChunk
+  std::vector<double> bodyVolume;    ///< current enclosed volume per body (rest volume at first)
+  std::vector<Scalar> bodyPressure;  ///< current gas pressure per body, Pa
+};
+
 /// Hookean force with damping along the axis, on each spring's `a` end (the `b` end gets minus it):
 /// f = (k·(|d| − L) + c·(v_b − v_a)·d̂)·d̂ with d = x_b − x_a.
-void computeSpringForces(World& world);
+void computeSpringForces(const SceneTopology& topology, const SimulationState& state,
+                         ForceBuffers& forces);
 
 /// Enclosed volume of every closed body by the divergence theorem, V = Σ a·(b×c)/6, summed in
 /// double over fixed chunks so the result does not depend on the thread count.
-void computeVolumes(World& world);
+void computeVolumes(const SceneTopology& topology, const SimulationState& state,
+                    ForceBuffers& forces);
 
 /// P = nRT/V per closed body, then the force P·A·n̂ of each triangle, a third on each corner.
 /// Needs computeVolumes() first.
-void computePressureForces(World& world);
+void computePressureForces(const SceneTopology& topology, const SimulationState& state,
+                           ForceBuffers& forces);
 
 /// The smallest volume the pressure law is evaluated at, as a fraction of the rest volume: keeps
 /// P finite when a body is crushed flat or turned inside out for a moment.

@@ -7,16 +7,16 @@
 /// the particle's springs. Solving for h gives h < (√(γ² + 4ω²) − γ)/ω². Gas pressure and contacts
 /// add much softer modes and are left out; the safety factor covers them.
 
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
 
 namespace softbake {
 
 struct StabilityBound {
-  double maxTimeStep = 0;          ///< seconds; infinity when nothing in the scene is a spring
-  Index limitingParticle = 0;      ///< the particle whose springs set the bound
+  double maxTimeStep = 0;      ///< seconds; infinity when nothing in the scene is a spring
+  Index limitingParticle = 0;  ///< the particle whose springs set the bound
 };
 
-StabilityBound computeStabilityBound(const World& world);
+StabilityBound computeStabilityBound(const SceneTopology& topology);
 
 /// Fraction of the bound that "auto" substeps aim for.
 inline constexpr double kStabilitySafety = 0.8;
@@ -24,13 +24,13 @@ inline constexpr double kStabilitySafety = 0.8;
 struct SubstepChoice {
   int substeps = 1;
   bool automatic = false;
-  double timeStep = 0;        ///< seconds per substep
-  double boundTimeStep = 0;   ///< the stability bound, seconds
+  double timeStep = 0;            ///< seconds per substep
+  double boundTimeStep = 0;       ///< the stability bound, seconds
   int minimumStableSubsteps = 1;  ///< fewest substeps that keep the time step under the bound
   bool belowBound() const { return substeps < minimumStableSubsteps; }
 };
 
 /// `requested` 0 means automatic: enough substeps to stay under kStabilitySafety of the bound.
-SubstepChoice chooseSubsteps(const World& world, int requested);
+SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested);
 
 }  // namespace softbake

@@ -4,16 +4,15 @@
 
 namespace softbake {
 
-void computeSmoothNormals(const World& world, std::span<const Vec3> positions, const Body& body,
-                          std::vector<Vec3f>& out) {
-  out.assign(body.particleCount, Vec3f::Zero());
-  for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
-    const Triangle& tri = world.triangles[t];
+void computeSmoothNormals(std::span<const Triangle> triangles, std::span<const Vec3> positions,
+                          Index firstParticle, Index particleCount, std::vector<Vec3f>& out) {
+  out.assign(particleCount, Vec3f::Zero());
+  for (const Triangle& tri : triangles) {
     // The cross product's length is twice the area: larger triangles weigh more.
     const Vec3f n = (positions[tri[1]] - positions[tri[0]])
                         .cross(positions[tri[2]] - positions[tri[0]])
                         .template cast<float>();
-    for (Index v : tri) out[v - body.firstParticle] += n;
+    for (Index v : tri) out[v - firstParticle] += n;
   }
   for (Vec3f& n : out) {
     const float length = n.norm();

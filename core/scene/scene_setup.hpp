@@ -62,8 +62,14 @@ enum class ResponseMode {
   None,      ///< detection only: contacts are found and recorded, nothing moves (figure 5b)
 };
 
+/// Every mode, in the order the command line and the scene format list them.
+inline constexpr ResponseMode kResponseModes[] = {ResponseMode::TwoSided, ResponseMode::Paper,
+                                                  ResponseMode::None};
+
 /// "two-sided", "paper", "none".
 std::string_view responseModeName(ResponseMode mode);
+/// The names of kResponseModes, in order.
+std::vector<std::string> responseModeNames();
 /// The mode a name gives, or false for an unknown name.
 bool parseResponseMode(std::string_view name, ResponseMode& mode);
 

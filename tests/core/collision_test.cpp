@@ -50,16 +50,15 @@ void addSquare(TriangleMesh& mesh, const Vec3f& origin, const Vec3f& u, const Ve
 }
 
 /// Moves particle 0 to `end` as if the integrator had, then runs detection and response once.
-std::vector<Contact> collideOnce(World& world, const Vec3& end, const Vec3& velocity,
+std::vector<Contact> collideOnce(test::StagedScene& scene, const Vec3& end, const Vec3& velocity,
                                  ResponseMode mode) {
-  world.previousPosition = world.position;
-  world.position[0] = end;
-  world.velocity[0] = velocity;
-  updateCollisionBoxes(world);
-  CollisionDetector detector(world.settings.collisions);
-  detector.detect(world);
+  scene.substepStart = scene.state.position;
+  scene.state.position[0] = end;
+  scene.state.velocity[0] = velocity;
+  CollisionDetector detector(scene.topology.settings.collisions);
+  detector.detect(scene.topology, {scene.substepStart, scene.state.position});
   std::vector<Contact> contacts;
-  respondToCollisions(world, detector, mode, contacts);
+  respondToCollisions(scene.topology, detector, mode, scene.state, contacts);
   return contacts;
 }
 
@@ -72,22 +71,22 @@ const Contact* findParticleContact(const std::vector<Contact>& contacts, Index p
 TEST(CollisionResponse, Case1PutsTheParticleAtTheCrossingPlusSkinAndStopsItsNormalSpeed) {
   TriangleMesh floor;
   addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));  // normal +y
-  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor));
-  const Scalar skin = world.settings.skin;
+  test::StagedScene staged(buildSceneTopology(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor)));
+  const Scalar skin = staged.topology.settings.skin;
   // From (0.2, 0.1) to (0.4, -0.1): crosses y = 0 halfway, at x = 0.3.
   const std::vector<Contact> contacts =
-      collideOnce(world, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::Paper);
+      collideOnce(staged, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::Paper);
   const Contact* contact = findParticleContact(contacts, 0);
   ASSERT_NE(contact, nullptr);
   EXPECT_EQ(contact->kind, ContactKind::ParticleTriangle);
   EXPECT_TRUE(contact->position.isApprox(Vec3(0.3f, 0, 0.05f), 1e-5f))
       << contact->position.transpose();
   EXPECT_TRUE(contact->normal.isApprox(Vec3(0, 1, 0), 1e-6f));
-  EXPECT_TRUE(world.position[0].isApprox(Vec3(0.3f, skin, 0.05f), 1e-5f))
-      << world.position[0].transpose();
+  EXPECT_TRUE(staged.state.position[0].isApprox(Vec3(0.3f, skin, 0.05f), 1e-5f))
+      << staged.state.position[0].transpose();
   // Restitution 0 and friction 0, the paper's response: the normal speed goes, the rest stays.
-  EXPECT_NEAR(world.velocity[0].y(), 0, 1e-6);
-  EXPECT_NEAR(world.velocity[0].x(), 2, 1e-6);
+  EXPECT_NEAR(staged.state.velocity[0].y(), 0, 1e-6);
+  EXPECT_NEAR(staged.state.velocity[0].x(), 2, 1e-6);
 }
 
 TEST(CollisionResponse, Case1ReflectsWithRestitutionAndSlowsWithFriction) {
@@ -96,11 +95,11 @@ TEST(CollisionResponse, Case1ReflectsWithRestitutionAndSlowsWithFriction) {
   SceneSetup scene = particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor);
   scene.staticMeshes[0].restitution = 0.5f;
   scene.staticMeshes[0].friction = 0.25f;
-  World world = buildWorld(scene);
-  collideOnce(world, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::TwoSided);
+  test::StagedScene staged(buildSceneTopology(scene));
+  collideOnce(staged, Vec3(0.4f, -0.1f, 0.05f), Vec3(2, -2, 0), ResponseMode::TwoSided);
   // Normal: -2 → +1. Tangential: 2 − μ(1+e)·2 = 2 − 0.75 = 1.25.
-  EXPECT_NEAR(world.velocity[0].y(), 1.0, 1e-5);
-  EXPECT_NEAR(world.velocity[0].x(), 1.25, 1e-5);
+  EXPECT_NEAR(staged.state.velocity[0].y(), 1.0, 1e-5);
+  EXPECT_NEAR(staged.state.velocity[0].x(), 1.25, 1e-5);
 }
 
 TEST(CollisionResponse, Case2PutsTheParticleOnTheCornerLineAndUsesTheAverageNormal) {
@@ -110,48 +109,52 @@ TEST(CollisionResponse, Case2PutsTheParticleOnTheCornerLineAndUsesTheAverageNorm
   TriangleMesh cross;
   addSquare(cross, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
   addSquare(cross, Vec3f(0, 0, 0), Vec3f(0, 1, 0), Vec3f(0, 0, 1));
-  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.05f, 0.1f), cross));
-  const Scalar skin = world.settings.skin;
+  test::StagedScene staged(buildSceneTopology(particleOverStatic(Vec3f(0.2f, 0.05f, 0.1f), cross)));
+  const Scalar skin = staged.topology.settings.skin;
   const std::vector<Contact> contacts =
-      collideOnce(world, Vec3(-0.05f, -0.2f, 0.1f), Vec3(-1, -1, 0), ResponseMode::Paper);
+      collideOnce(staged, Vec3(-0.05f, -0.2f, 0.1f), Vec3(-1, -1, 0), ResponseMode::Paper);
   const Contact* contact = findParticleContact(contacts, 0);
   ASSERT_NE(contact, nullptr);
   EXPECT_EQ(contact->kind, ContactKind::Corner);
   const Vec3 average = Vec3(1, 1, 0).normalized();
   EXPECT_TRUE(contact->normal.isApprox(average, 1e-5f)) << contact->normal.transpose();
   EXPECT_TRUE(contact->position.isApprox(Vec3(0, 0, 0.1f), 1e-5f)) << contact->position.transpose();
-  EXPECT_TRUE(world.position[0].isApprox(Vec3(0, 0, 0.1f) + skin * average, 1e-5f))
-      << world.position[0].transpose();
-  EXPECT_NEAR(world.velocity[0].dot(average), 0, 1e-5);  // moving straight into the corner: stops
+  EXPECT_TRUE(staged.state.position[0].isApprox(Vec3(0, 0, 0.1f) + skin * average, 1e-5f))
+      << staged.state.position[0].transpose();
+  EXPECT_NEAR(staged.state.velocity[0].dot(average), 0,
+              1e-5);  // moving straight into the corner: stops
 }
 
 TEST(CollisionResponse, DetectionOnlyRecordsTheContactAndMovesNothing) {
   TriangleMesh floor;
   addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
-  World world = buildWorld(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor));
+  test::StagedScene staged(buildSceneTopology(particleOverStatic(Vec3f(0.2f, 0.1f, 0.05f), floor)));
   const Vec3 end(0.4f, -0.1f, 0.05f), velocity(2, -2, 0);
-  const std::vector<Contact> contacts = collideOnce(world, end, velocity, ResponseMode::None);
+  const std::vector<Contact> contacts = collideOnce(staged, end, velocity, ResponseMode::None);
   EXPECT_NE(findParticleContact(contacts, 0), nullptr);
-  EXPECT_EQ(world.position[0], end);
-  EXPECT_EQ(world.velocity[0], velocity);
+  EXPECT_EQ(staged.state.position[0], end);
+  EXPECT_EQ(staged.state.velocity[0], velocity);
 }
 
 TEST(CollisionResponse, ParticleLeavingAClosedBodyIsNotPushedBackIn) {
   // A closed static icosphere; the particle starts inside it and leaves through its surface.
   const TriangleMesh ball = makeIcosphere(2, 0.5f, Vec3f(0, 0, 0));
-  World world = buildWorld(particleOverStatic(Vec3f(0.1f, 0.3f, 0.0f), ball));
+  test::StagedScene staged(buildSceneTopology(particleOverStatic(Vec3f(0.1f, 0.3f, 0.0f), ball)));
   const Vec3 end(0.1f, 0.7f, 0.0f);
-  const std::vector<Contact> contacts = collideOnce(world, end, Vec3(0, 5, 0), ResponseMode::Paper);
+  const std::vector<Contact> contacts =
+      collideOnce(staged, end, Vec3(0, 5, 0), ResponseMode::Paper);
   EXPECT_EQ(findParticleContact(contacts, 0), nullptr);
-  EXPECT_EQ(world.position[0], end);
+  EXPECT_EQ(staged.state.position[0], end);
 }
 
 /// Σ m·v and Σ m·x over every particle, in double.
-std::pair<Vec3d, Vec3d> momentumAndMoment(const World& world) {
+std::pair<Vec3d, Vec3d> momentumAndMoment(const Simulator& simulator) {
+  const std::vector<Scalar>& mass = simulator.topology().mass;
+  const SimulationState& state = simulator.state();
   Vec3d momentum = Vec3d::Zero(), moment = Vec3d::Zero();
-  for (std::size_t i = 0; i < world.particleCount(); ++i) {
-    momentum += double(world.mass[i]) * world.velocity[i].cast<double>();
-    moment += double(world.mass[i]) * world.position[i].cast<double>();
+  for (std::size_t i = 0; i < state.particleCount(); ++i) {
+    momentum += double(mass[i]) * state.velocity[i].cast<double>();
+    moment += double(mass[i]) * state.position[i].cast<double>();
   }
   return {momentum, moment};
 }
@@ -173,15 +176,15 @@ SceneSetup headOnBalls(ResponseMode mode) {
 }
 
 TEST(CollisionResponse, TwoSidedSoftContactConservesMomentum) {
-  Simulator simulator(buildWorld(headOnBalls(ResponseMode::TwoSided)));
-  const auto [momentum0, moment0] = momentumAndMoment(simulator.world());
+  Simulator simulator(buildSceneTopology(headOnBalls(ResponseMode::TwoSided)));
+  const auto [momentum0, moment0] = momentumAndMoment(simulator);
   std::size_t contacts = 0;
   for (int frame = 2; frame <= 6; ++frame) {
     simulator.advanceToFrame(frame);
     contacts += simulator.lastFrameStats().contacts;
   }
   ASSERT_GT(contacts, 0u) << "the balls must have met";
-  const auto [momentum, moment] = momentumAndMoment(simulator.world());
+  const auto [momentum, moment] = momentumAndMoment(simulator);
   // Internal forces and the two-sided response change no total momentum; float round-off does,
   // a little: 1e-4 of the 6 kg·m/s each ball carries in.
   EXPECT_LT((momentum - momentum0).norm(), 6e-4) << (momentum - momentum0).transpose();
@@ -198,7 +201,7 @@ TEST(CollisionResponse, RestingContactStepsAllocateNothing) {
   floor.name = "floor";
   addSquare(floor.mesh, Vec3f(0, 0, 0), Vec3f(0, 0, 2), Vec3f(2, 0, 0));
   scene.staticMeshes.push_back(floor);
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   for (int frame = 2; frame <= 120; ++frame) simulator.advanceToFrame(frame);
   const test::CountedAllocations counted;
   simulator.advanceToFrame(121);
@@ -207,16 +210,16 @@ TEST(CollisionResponse, RestingContactStepsAllocateNothing) {
   // It rests on the floor mesh: no particle below it by more than the skin. (A long floor edge
   // once yanked the ball's corners by a tenth of its 4 m length and blew the run up.)
   Scalar lowest = 1;
-  for (const Vec3& p : simulator.world().position) lowest = std::min(lowest, p.y());
-  EXPECT_GE(lowest, -simulator.world().settings.skin);
+  for (const Vec3& p : simulator.state().position) lowest = std::min(lowest, p.y());
+  EXPECT_GE(lowest, -simulator.topology().settings.skin);
   EXPECT_LT(lowest, Scalar(0.01));
 }
 
 TEST(CollisionResponse, PaperModeMovesOnlyTheParticleAndSoDoesNotConserveMomentum) {
-  Simulator simulator(buildWorld(headOnBalls(ResponseMode::Paper)));
-  const Vec3d momentum0 = momentumAndMoment(simulator.world()).first;
+  Simulator simulator(buildSceneTopology(headOnBalls(ResponseMode::Paper)));
+  const Vec3d momentum0 = momentumAndMoment(simulator).first;
   for (int frame = 2; frame <= 6; ++frame) simulator.advanceToFrame(frame);
-  const Vec3d momentum = momentumAndMoment(simulator.world()).first;
+  const Vec3d momentum = momentumAndMoment(simulator).first;
   EXPECT_GT((momentum - momentum0).norm(), 1e-2) << "the one-sided response should show";
 }
 
@@ -228,9 +231,11 @@ constexpr std::size_t kInterpenetrationBound = 0;
 /// Pairs of triangles of different surfaces (bodies and static meshes) that intersect, by the
 /// double-precision reference of the tests, not by the code under test. Brute force over pairs
 /// whose boxes overlap.
-std::size_t intersectingPairsBetweenSurfaces(const World& world) {
-  const CollisionGeometry& g = world.collision;
-  auto corner = [&](Index v) -> Vec3d { return collisionVertex(world, v).cast<double>(); };
+std::size_t intersectingPairsBetweenSurfaces(const Simulator& simulator) {
+  const CollisionGeometry& g = simulator.topology().collision;
+  auto corner = [&](Index v) -> Vec3d {
+    return g.vertex(simulator.state().position, v).cast<double>();
+  };
   std::vector<Eigen::AlignedBox3d> boxes(g.triangleVertices.size());
   for (std::size_t t = 0; t < boxes.size(); ++t)
     for (Index v : g.triangleVertices[t]) boxes[t].extend(corner(v));
@@ -281,12 +286,12 @@ SceneSetup ballsOnStaticSphere() {
 /// Runs `frames` frames; returns the largest count of intersecting pairs seen at a frame's end,
 /// and the total number of contacts.
 std::pair<std::size_t, std::size_t> worstInterpenetration(SceneSetup scene, int frames) {
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   std::size_t worst = 0, contacts = 0;
   for (int frame = 2; frame <= frames; ++frame) {
     simulator.advanceToFrame(frame);
     contacts += simulator.lastFrameStats().contacts;
-    worst = std::max(worst, intersectingPairsBetweenSurfaces(simulator.world()));
+    worst = std::max(worst, intersectingPairsBetweenSurfaces(simulator));
   }
   return {worst, contacts};
 }
@@ -313,13 +318,13 @@ TEST(CollisionScenes, WithoutResponseTheBallsPassIntoTheSphere) {
 
 TEST(CollisionScenes, BallOnTheGroundStaysAboveItWithinTheSkin) {
   SceneSetup scene = test::ballScene(*findMaterialPreset("rubber"), 3, 0.5f, Vec3f(0, 2, 0));
-  Simulator simulator(buildWorld(scene));
-  const Scalar skin = simulator.world().settings.skin;
+  Simulator simulator(buildSceneTopology(scene));
+  const Scalar skin = simulator.topology().settings.skin;
   Scalar lowest = 1;
   for (int frame = 2; frame <= 72; ++frame)
     for (int s = 0; s < simulator.substeps().substeps; ++s) {
       simulator.step(frame);
-      for (const Vec3& p : simulator.world().position) lowest = std::min(lowest, p.y());
+      for (const Vec3& p : simulator.state().position) lowest = std::min(lowest, p.y());
     }
   EXPECT_GE(lowest, -skin) << "a particle ended a step below the ground";
 }
@@ -327,13 +332,13 @@ TEST(CollisionScenes, BallOnTheGroundStaysAboveItWithinTheSkin) {
 TEST(CollisionScenes, WithoutResponseTheBallFallsThroughTheGround) {
   SceneSetup scene = test::ballScene(*findMaterialPreset("rubber"), 3, 0.5f, Vec3f(0, 2, 0));
   scene.settings.collisions.response = ResponseMode::None;
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   std::size_t planeContacts = 0;
   for (int frame = 2; frame <= 24; ++frame) {
     simulator.advanceToFrame(frame);
     planeContacts += simulator.lastFrameStats().planeContacts;
   }
-  EXPECT_LT(test::centroid(simulator.world()).y(), 0) << "figure 5b: the ball goes through";
+  EXPECT_LT(test::centroid(simulator.state()).y(), 0) << "figure 5b: the ball goes through";
   EXPECT_GT(planeContacts, 0u) << "the crossings are still detected";
 }
 
@@ -347,14 +352,14 @@ struct RunRecord {
 RunRecord record(SceneSetup scene, BroadPhaseKind kind, int threads, int frames) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   scene.settings.collisions.broadPhase = kind;
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   RunRecord run;
   for (int frame = 2; frame <= frames; ++frame) {
     simulator.advanceToFrame(frame);
     run.contacts.insert(run.contacts.end(), simulator.contacts().begin(),
                         simulator.contacts().end());
   }
-  run.positions = simulator.world().position;
+  run.positions = simulator.state().position;
   return run;
 }
 

@@ -18,9 +18,9 @@ std::vector<Vec3> simulate(int threads) {
   second.material = *findMaterialPreset("jelly");
   second.velocity = Vec3(-1, 0, 0.5f);
   scene.bodies.push_back(second);
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   for (int frame = 2; frame <= 30; ++frame) simulator.advanceToFrame(frame);
-  return simulator.world().position;
+  return simulator.state().position;
 }
 
 TEST(Determinism, OneAndTwoThreadsGiveBitIdenticalPositions) {

@@ -9,37 +9,37 @@ namespace softbake {
 namespace {
 
 TEST(SpringForce, StretchedSpringPullsBackWithHookesLaw) {
-  World world = test::springPair(/*stiffness=*/100, /*damping=*/0, /*mass=*/1, /*length=*/1.5f);
-  computeSpringForces(world);
+  test::StagedScene pair =
+      test::springPair(/*stiffness=*/100, /*damping=*/0, /*mass=*/1, /*length=*/1.5f);
+  computeSpringForces(pair.topology, pair.state, pair.forces);
   // |f| = k·(L − L0) = 100·0.5, pulling a towards b (+x) and b towards a.
-  EXPECT_NEAR(world.springForce[0].x(), 50.0, 1e-4);
-  EXPECT_NEAR(world.springForce[0].y(), 0.0, 1e-6);
-  EXPECT_NEAR(world.springForce[0].z(), 0.0, 1e-6);
+  EXPECT_NEAR(pair.forces.springForce[0].x(), 50.0, 1e-4);
+  EXPECT_NEAR(pair.forces.springForce[0].y(), 0.0, 1e-6);
+  EXPECT_NEAR(pair.forces.springForce[0].z(), 0.0, 1e-6);
 }
 
 TEST(SpringForce, CompressedSpringPushesApart) {
-  World world = test::springPair(100, 0, 1, 0.75f);
-  computeSpringForces(world);
-  EXPECT_NEAR(world.springForce[0].x(), -25.0, 1e-4);
+  test::StagedScene pair = test::springPair(100, 0, 1, 0.75f);
+  computeSpringForces(pair.topology, pair.state, pair.forces);
+  EXPECT_NEAR(pair.forces.springForce[0].x(), -25.0, 1e-4);
 }
 
 TEST(SpringForce, DampingActsOnRelativeVelocityAlongTheAxisOnly) {
-  World world = test::springPair(100, /*damping=*/2, 1, /*length=*/1);
-  world.velocity[1] = Vec3(3, 5, 0);  // separating at 3 m/s, sliding sideways at 5 m/s
-  computeSpringForces(world);
-  EXPECT_NEAR(world.springForce[0].x(), 2 * 3.0, 1e-5);
-  EXPECT_NEAR(world.springForce[0].y(), 0.0, 1e-6);
+  test::StagedScene pair = test::springPair(100, /*damping=*/2, 1, /*length=*/1);
+  pair.state.velocity[1] = Vec3(3, 5, 0);  // separating at 3 m/s, sliding sideways at 5 m/s
+  computeSpringForces(pair.topology, pair.state, pair.forces);
+  EXPECT_NEAR(pair.forces.springForce[0].x(), 2 * 3.0, 1e-5);
+  EXPECT_NEAR(pair.forces.springForce[0].y(), 0.0, 1e-6);
 }
 
 TEST(SpringForce, BodyAtRestStaysAtRest) {
   Material material;
   material.pressure = 0;
-  World world = buildWorld(test::ballScene(material, 3, 0.5f, {0, 1, 0}, /*gravity=*/false,
-                                           /*ground=*/false));
-  const std::vector<Vec3> start = world.position;
-  Simulator simulator(std::move(world));
+  Simulator simulator(buildSceneTopology(test::ballScene(material, 3, 0.5f, {0, 1, 0},
+                                                         /*gravity=*/false, /*ground=*/false)));
+  const std::vector<Vec3> start = simulator.state().position;
   for (int frame = 2; frame <= 10; ++frame) simulator.advanceToFrame(frame);
-  const World& end = simulator.world();
+  const SimulationState& end = simulator.state();
   for (Index i = 0; i < end.particleCount(); ++i) {
     EXPECT_EQ(end.position[i], start[i]) << "particle " << i;
     EXPECT_EQ(end.velocity[i], Vec3::Zero()) << "particle " << i;
@@ -50,13 +50,13 @@ TEST(Mass, SpreadByVertexAreaAndSumsToBodyMass) {
   Material material;
   SceneSetup scene = test::ballScene(material);
   scene.bodies[0].mass = 2.5f;
-  const World world = buildWorld(scene);
+  const SceneTopology topology = buildSceneTopology(scene);
   double total = 0;
-  for (Scalar m : world.mass) total += m;
+  for (Scalar m : topology.mass) total += m;
   EXPECT_NEAR(total, 2.5, 1e-5);
   // Icosphere vertices have unequal areas (the 12 original vertices have five neighbours), so
   // area weighting must give unequal masses; an even split would not.
-  const auto [lightest, heaviest] = std::minmax_element(world.mass.begin(), world.mass.end());
+  const auto [lightest, heaviest] = std::minmax_element(topology.mass.begin(), topology.mass.end());
   EXPECT_LT(*lightest, *heaviest * 0.95f);
 }
 
@@ -66,17 +66,16 @@ TEST(Pins, PinnedParticlesDoNotMoveUnderGravity) {
   SceneSetup scene = test::ballScene(material, 2, 0.5f, {0, 1, 0}, true, false);
   scene.bodies[0].pins.boxes.push_back({Vec3f(-1, 1.4f, -1), Vec3f(1, 2, 1)});  // the top cap
   scene.bodies[0].pins.particles.push_back(0);
-  World world = buildWorld(scene);
+  Simulator simulator(buildSceneTopology(scene));
   std::vector<Index> pinned;
-  for (Index i = 0; i < world.particleCount(); ++i)
-    if (world.inverseMass[i] == 0) pinned.push_back(i);
+  for (Index i = 0; i < simulator.topology().particleCount(); ++i)
+    if (simulator.topology().inverseMass[i] == 0) pinned.push_back(i);
   ASSERT_GT(pinned.size(), 3u);
-  const std::vector<Vec3> start = world.position;
-  Simulator simulator(std::move(world));
+  const std::vector<Vec3> start = simulator.state().position;
   for (int frame = 2; frame <= 24; ++frame) simulator.advanceToFrame(frame);
-  for (Index i : pinned) EXPECT_EQ(simulator.world().position[i], start[i]);
+  for (Index i : pinned) EXPECT_EQ(simulator.state().position[i], start[i]);
   // The rest hangs: the bottom sagged.
-  EXPECT_LT(test::centroid(simulator.world()).y(), 1.0);
+  EXPECT_LT(test::centroid(simulator.state()).y(), 1.0);
 }
 
 TEST(Pins, IndexBeyondTheBodyIsAnErrorNamingIt) {
@@ -84,7 +83,7 @@ TEST(Pins, IndexBeyondTheBodyIsAnErrorNamingIt) {
   SceneSetup scene = test::ballScene(material, 1);
   scene.bodies[0].pins.particles.push_back(9999);
   try {
-    buildWorld(scene);
+    buildSceneTopology(scene);
     FAIL() << "expected an error";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("body 'ball': pin index 9999"), std::string::npos)

@@ -20,9 +20,10 @@ TEST(Volume, IcosphereConvergesToTheSphereAtSecondOrder) {
   double previousError = 0;
   for (int level = 2; level <= 5; ++level) {
     Material material;
-    World world = buildWorld(test::ballScene(material, level, 1.0f, {0, 0, 0}, false, false));
-    computeVolumes(world);
-    const double error = 1 - world.bodyVolume[0] / sphereVolume(1.0);
+    test::StagedScene scene(
+        buildSceneTopology(test::ballScene(material, level, 1.0f, {0, 0, 0}, false, false)));
+    computeVolumes(scene.topology, scene.state, scene.forces);
+    const double error = 1 - scene.forces.bodyVolume[0] / sphereVolume(1.0);
     EXPECT_GT(error, 0) << "level " << level << " must be inside the sphere";
     if (level == 4) {
       EXPECT_LT(error, 0.01);
@@ -37,21 +38,23 @@ TEST(Volume, IcosphereConvergesToTheSphereAtSecondOrder) {
 
 TEST(Volume, MatchesTheSerialDoublePrecisionSumAtBuildTime) {
   Material material;
-  World world = buildWorld(test::ballScene(material, 4, 0.7f, {3, -2, 5}, false, false));
-  const double atBuild = world.bodies[0].restVolume;
-  computeVolumes(world);
-  EXPECT_NEAR(world.bodyVolume[0], atBuild, 1e-12 * atBuild);
+  test::StagedScene scene(
+      buildSceneTopology(test::ballScene(material, 4, 0.7f, {3, -2, 5}, false, false)));
+  const double atBuild = scene.topology.bodies[0].restVolume;
+  computeVolumes(scene.topology, scene.state, scene.forces);
+  EXPECT_NEAR(scene.forces.bodyVolume[0], atBuild, 1e-12 * atBuild);
 }
 
 TEST(Pressure, ForcesOnAClosedBodySumToZero) {
   Material material;
   material.pressure = 500;
-  World world = buildWorld(test::ballScene(material, 4, 0.5f, {0, 0, 0}, false, false));
-  computeVolumes(world);
-  computePressureForces(world);
+  test::StagedScene scene(
+      buildSceneTopology(test::ballScene(material, 4, 0.5f, {0, 0, 0}, false, false)));
+  computeVolumes(scene.topology, scene.state, scene.forces);
+  computePressureForces(scene.topology, scene.state, scene.forces);
   Vec3d sum = Vec3d::Zero();
   double magnitude = 0;
-  for (const Vec3& f : world.triangleForce) {
+  for (const Vec3& f : scene.forces.triangleForce) {
     sum += 3 * f.cast<double>();
     magnitude += 3 * f.cast<double>().norm();
   }
@@ -63,11 +66,12 @@ TEST(Pressure, ForcesOnAClosedBodySumToZero) {
 TEST(Pressure, IsIdealGasOfTheCurrentVolume) {
   Material material;
   material.pressure = 200;
-  World world = buildWorld(test::ballScene(material, 3, 0.5f, {0, 0, 0}, false, false));
-  for (Vec3& p : world.position) p *= 2;  // eight times the volume
-  computeVolumes(world);
-  computePressureForces(world);
-  EXPECT_NEAR(world.bodyPressure[0], 200.0 / 8, 1e-3);
+  test::StagedScene scene(
+      buildSceneTopology(test::ballScene(material, 3, 0.5f, {0, 0, 0}, false, false)));
+  for (Vec3& p : scene.state.position) p *= 2;  // eight times the volume
+  computeVolumes(scene.topology, scene.state, scene.forces);
+  computePressureForces(scene.topology, scene.state, scene.forces);
+  EXPECT_NEAR(scene.forces.bodyPressure[0], 200.0 / 8, 1e-3);
 }
 
 TEST(Pressure, OpenMeshHasNoPressure) {
@@ -76,36 +80,38 @@ TEST(Pressure, OpenMeshHasNoPressure) {
   SceneSetup scene = test::ballScene(material, 2, 0.5f, {0, 0, 0}, false, false);
   scene.bodies[0].mesh.triangles.pop_back();
   BuildReport report;
-  World world = buildWorld(scene, &report);
-  EXPECT_FALSE(world.bodies[0].closed);
-  EXPECT_EQ(world.bodies[0].gasAmount, 0);
+  const SceneTopology topology = buildSceneTopology(scene, &report);
+  EXPECT_FALSE(topology.bodies[0].closed);
+  EXPECT_EQ(topology.bodies[0].gasAmount, 0);
   ASSERT_EQ(report.notes.size(), 1u);
   EXPECT_NE(report.notes[0].find("pressure is off"), std::string::npos) << report.notes[0];
 }
 
 // Independent reference: restrict the body to uniform scalings x → λx. Spring energy is
 // Σ ½k(λ−1)²L², gas energy −nRT·ln V with V ∝ λ³. Stationary when λ(λ−1)·Σ kL² = 3nRT.
-double uniformScalingEquilibrium(const World& world) {
+double uniformScalingEquilibrium(const SceneTopology& topology) {
   double stiffnessLengthSquared = 0;
-  for (const Spring& s : world.springs)
+  for (const Spring& s : topology.springs)
     stiffnessLengthSquared += double(s.stiffness) * s.restLength * s.restLength;
-  const double c = 3 * world.bodies[0].gasAmount / stiffnessLengthSquared;
+  const double c = 3 * topology.bodies[0].gasAmount / stiffnessLengthSquared;
   return (1 + std::sqrt(1 + 4 * c)) / 2;
 }
 
 TEST(Pressure, BalloonInflatesToTheIdealGasEquilibrium) {
   Material balloon = *findMaterialPreset("balloon");
   balloon.damping = 0.3f;  // settle within the test's few simulated seconds
-  World world = buildWorld(test::ballScene(balloon, 3, 0.5f, {0, 0, 0}, false, false));
-  const double lambda = uniformScalingEquilibrium(world);
+  Simulator simulator(
+      buildSceneTopology(test::ballScene(balloon, 3, 0.5f, {0, 0, 0}, false, false)));
+  const double lambda = uniformScalingEquilibrium(simulator.topology());
   ASSERT_GT(lambda, 1.1) << "the balloon preset should visibly inflate";
-  const double expectedVolume = world.bodies[0].restVolume * lambda * lambda * lambda;
-  Simulator simulator(std::move(world));
+  const double expectedVolume =
+      simulator.topology().bodies[0].restVolume * lambda * lambda * lambda;
   for (int frame = 2; frame <= 24 * 6; ++frame) simulator.advanceToFrame(frame);
-  World& end = simulator.world();
-  computeVolumes(end);
-  EXPECT_NEAR(end.bodyVolume[0] / expectedVolume, 1.0, 0.03)
-      << "λ=" << lambda << " volume " << end.bodyVolume[0] << " expected " << expectedVolume;
+  const SimulationState& end = simulator.state();
+  ForceBuffers forces(simulator.topology());
+  computeVolumes(simulator.topology(), end, forces);
+  EXPECT_NEAR(forces.bodyVolume[0] / expectedVolume, 1.0, 0.03)
+      << "λ=" << lambda << " volume " << forces.bodyVolume[0] << " expected " << expectedVolume;
   // Settled: the membrane no longer moves.
   double maxSpeed = 0;
   for (const Vec3& v : end.velocity) maxSpeed = std::max(maxSpeed, double(v.norm()));

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "core/error.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/integrator.hpp"
+#include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 
@@ -15,12 +15,12 @@ namespace {
 
 /// Largest separation reached when a spring pair, released from 10% stretch, runs 20000 steps.
 double maxAmplitude(Scalar stiffness, Scalar damping, double dt) {
-  World world = test::springPair(stiffness, damping, 1, 1.1f);
+  test::StagedScene pair = test::springPair(stiffness, damping, 1, 1.1f);
+  const std::vector<Vec3>& x = pair.state.position;
   double amplitude = 0;
   for (int i = 0; i < 20000; ++i) {
-    computeSpringForces(world);
-    integrate(world, Scalar(dt));
-    amplitude = std::max(amplitude, double((world.position[1] - world.position[0]).norm()) - 1);
+    test::springStep(pair, Scalar(dt));
+    amplitude = std::max(amplitude, double((x[1] - x[0]).norm()) - 1);
     if (!std::isfinite(amplitude) || amplitude > 1e3) return 1e9;
   }
   return amplitude;
@@ -28,15 +28,15 @@ double maxAmplitude(Scalar stiffness, Scalar damping, double dt) {
 
 TEST(StabilityBound, TwoMassSpringMatchesTheAnalyticBound) {
   // Relative coordinate of two unit masses: ω² = 2k, so explicit Euler needs dt < 2/ω.
-  World world = test::springPair(/*stiffness=*/800, 0, 1, 1);
-  const StabilityBound bound = computeStabilityBound(world);
+  const test::StagedScene pair = test::springPair(/*stiffness=*/800, 0, 1, 1);
+  const StabilityBound bound = computeStabilityBound(pair.topology);
   EXPECT_NEAR(bound.maxTimeStep, 2 / std::sqrt(1600.0), 1e-9);
 }
 
 TEST(StabilityBound, IsWhereTheSchemeReallyTurnsUnstable) {
   for (Scalar damping : {Scalar(0), Scalar(3)}) {
-    World world = test::springPair(800, damping, 1, 1);
-    const double h = computeStabilityBound(world).maxTimeStep;
+    const test::StagedScene pair = test::springPair(800, damping, 1, 1);
+    const double h = computeStabilityBound(pair.topology).maxTimeStep;
     // Just inside the bound the oscillation stays bounded (near the bound explicit Euler's
     // amplitude exceeds the true 0.1, but it does not grow); just outside it grows until the two
     // particles pass through each other, where the spring's nonlinearity caps it.
@@ -46,26 +46,26 @@ TEST(StabilityBound, IsWhereTheSchemeReallyTurnsUnstable) {
 }
 
 TEST(Substeps, AutoStaysUnderTheBoundWithMargin) {
-  World world = buildWorld(test::ballScene(*findMaterialPreset("stiff")));
-  const SubstepChoice choice = chooseSubsteps(world, 0);
+  const SceneTopology topology = buildSceneTopology(test::ballScene(*findMaterialPreset("stiff")));
+  const SubstepChoice choice = chooseSubsteps(topology, 0);
   EXPECT_TRUE(choice.automatic);
   EXPECT_LE(choice.timeStep, kStabilitySafety * choice.boundTimeStep * 1.0000001);
   EXPECT_FALSE(choice.belowBound());
 }
 
 TEST(Substeps, ExplicitValueBelowTheBoundIsFlagged) {
-  World world = buildWorld(test::ballScene(*findMaterialPreset("stiff")));
-  const SubstepChoice automatic = chooseSubsteps(world, 0);
-  const SubstepChoice tooFew = chooseSubsteps(world, automatic.minimumStableSubsteps / 2);
+  const SceneTopology topology = buildSceneTopology(test::ballScene(*findMaterialPreset("stiff")));
+  const SubstepChoice automatic = chooseSubsteps(topology, 0);
+  const SubstepChoice tooFew = chooseSubsteps(topology, automatic.minimumStableSubsteps / 2);
   EXPECT_TRUE(tooFew.belowBound());
   EXPECT_GT(tooFew.timeStep, tooFew.boundTimeStep);
 }
 
 TEST(BlowUp, TooFewSubstepsStopWithAMessageNamingBodyAndFrame) {
   SceneSetup scene = test::ballScene(*findMaterialPreset("stiff"));
-  World probe = buildWorld(scene);
+  const SceneTopology probe = buildSceneTopology(scene);
   scene.settings.substeps = std::max(1, chooseSubsteps(probe, 0).minimumStableSubsteps / 4);
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
   try {
     for (int frame = 2; frame <= 240; ++frame) simulator.advanceToFrame(frame);
     FAIL() << "a quarter of the stable substeps should blow up";
@@ -75,12 +75,12 @@ TEST(BlowUp, TooFewSubstepsStopWithAMessageNamingBodyAndFrame) {
     EXPECT_NE(message.find("at frame "), std::string::npos) << message;
     EXPECT_NE(message.find("more substeps"), std::string::npos) << message;
   }
-  for (const Vec3& p : simulator.world().position) (void)p;  // state stays inspectable
+  for (const Vec3& p : simulator.state().position) (void)p;  // state stays inspectable
 }
 
 TEST(BlowUp, AutoSubstepsRunEveryPresetForTwoSecondsWithoutBlowingUp) {
   for (const NamedMaterial& preset : materialPresets()) {
-    Simulator simulator(buildWorld(test::ballScene(preset.material)));
+    Simulator simulator(buildSceneTopology(test::ballScene(preset.material)));
     for (int frame = 2; frame <= 48; ++frame)
       ASSERT_NO_THROW(simulator.advanceToFrame(frame)) << preset.name;
   }

@@ -1,35 +1,56 @@
 #pragma once
-// Small worlds for the core tests, built directly so each test controls every number.
+// Small scenes for the core tests, built directly so each test controls every number.
 
+#include <vector>
+
+#include "core/dynamics/forces.hpp"
+#include "core/dynamics/integrator.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/scene/scene_setup.hpp"
-#include "core/scene/world.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
 
 namespace softbake::test {
 
+/// A topology, its state and the stages' buffers, for tests that run one stage at a time.
+struct StagedScene {
+  SceneTopology topology;
+  SimulationState state;
+  ForceBuffers forces;
+  std::vector<Vec3> substepStart;  ///< the integrator's copy of where the substep began
+
+  explicit StagedScene(SceneTopology built)
+      : topology(std::move(built)),
+        state(initialState(topology)),
+        forces(topology),
+        substepStart(state.position) {}
+};
+
 /// Two particles of `mass` joined by one spring of rest length 1 along x, no gravity.
-inline World springPair(Scalar stiffness, Scalar damping, Scalar mass, Scalar stretchedLength) {
-  World world;
-  world.settings.gravity.setZero();
-  world.position = {Vec3(0, 0, 0), Vec3(stretchedLength, 0, 0)};
-  world.previousPosition = world.position;
-  world.velocity = {Vec3::Zero(), Vec3::Zero()};
-  world.mass = {mass, mass};
-  world.inverseMass = {1 / mass, 1 / mass};
-  world.particleBody = {0, 0};
-  world.springs = {{0, 1, 1, stiffness, damping}};
-  world.springRowStart = {0, 1, 2};
-  world.springRefs = {0, 1};
-  world.triangleRowStart = {0, 0, 0};
-  world.springForce.assign(1, Vec3::Zero());
+inline StagedScene springPair(Scalar stiffness, Scalar damping, Scalar mass,
+                              Scalar stretchedLength) {
+  SceneTopology topology;
+  topology.settings.gravity.setZero();
+  topology.restPosition = {Vec3(0, 0, 0), Vec3(stretchedLength, 0, 0)};
+  topology.mass = {mass, mass};
+  topology.inverseMass = {1 / mass, 1 / mass};
+  topology.particleBody = {0, 0};
+  topology.springs = {{0, 1, 1, stiffness, damping}};
+  topology.springRowStart = {0, 1, 2};
+  topology.springRefs = {0, 1};
+  topology.triangleRowStart = {0, 0, 0};
   Body body;
   body.name = "pair";
   body.particleCount = 2;
   body.springCount = 1;
-  world.bodies.push_back(body);
-  world.bodyVolume = {0};
-  world.bodyPressure = {0};
-  return world;
+  topology.bodies.push_back(body);
+  return StagedScene(std::move(topology));
+}
+
+/// The pair's one substep without pressure: springs, then the integrator.
+inline bool springStep(StagedScene& scene, Scalar dt) {
+  computeSpringForces(scene.topology, scene.state, scene.forces);
+  return integrate(scene.topology, scene.forces, dt, scene.state, scene.substepStart);
 }
 
 /// One icosphere body; gravity and ground as given.
@@ -49,10 +70,10 @@ inline SceneSetup ballScene(const Material& material, int subdivisions = 3, floa
   return scene;
 }
 
-inline Vec3d centroid(const World& world) {
+inline Vec3d centroid(const SimulationState& state) {
   Vec3d sum = Vec3d::Zero();
-  for (const Vec3& p : world.position) sum += p.cast<double>();
-  return sum / double(world.particleCount());
+  for (const Vec3& p : state.position) sum += p.cast<double>();
+  return sum / double(state.particleCount());
 }
 
 }  // namespace softbake::test

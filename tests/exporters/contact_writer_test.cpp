@@ -13,14 +13,14 @@ namespace {
 
 TEST(ContactWriter, WritesEachFramesContactsWithNamesAndLocalIndices) {
   test::ScratchDirectory out;
-  const World world = test::makeBallsWorld({0.5f, 0.5f});
-  const Body& second = world.bodies[1];
-  ContactWriter writer(world, out.path(), "balls", 4);
+  const auto world = test::makeBallsTopology({0.5f, 0.5f});
+  const Body& second = world->bodies[1];
+  ContactWriter writer(*world, out.path(), "balls", 4);
 
   Frame frame;
   frame.number = 7;
   frame.time = 0.25;
-  frame.positions = world.position;
+  frame.positions = world->restPosition;
   Contact particle;
   particle.kind = ContactKind::ParticleTriangle;
   particle.position = Vec3(1, 2, 3);
@@ -60,8 +60,8 @@ TEST(ContactWriter, WritesEachFramesContactsWithNamesAndLocalIndices) {
 
 TEST(ContactWriter, SequenceIsNamedLikeTheObjSequence) {
   test::ScratchDirectory out;
-  const World world = test::makeBallsWorld({0.5f});
-  const ContactWriter contacts(world, out.path(), "balls", 5);
+  const auto world = test::makeBallsTopology({0.5f});
+  const ContactWriter contacts(*world, out.path(), "balls", 5);
   const ObjSequenceWriter obj(world, out.path(), "balls", 5);
   EXPECT_EQ(contacts.sequence().pattern, "contacts/balls_#####.json");
   EXPECT_EQ(contacts.framePath(42).stem(), obj.framePath(42).stem());

@@ -17,7 +17,7 @@ namespace softbake {
 namespace {
 
 using test::listDirectory;
-using test::makeBallsWorld;
+using test::makeBallsTopology;
 using test::ScratchDirectory;
 
 /// What a sink saw, kept outside it because the pipeline owns the sink.
@@ -253,20 +253,20 @@ TEST(FramePipeline, RunsWithoutSinks) {
 }
 
 TEST(FramePipeline, ObjWriteFailingMidRunLeavesNoPartialFile) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory dir;
   auto writer = std::make_unique<ObjSequenceWriter>(world, dir.path(), "balls");
   // Frame 3 cannot be renamed into place: the writer fails after formatting and writing it.
   const std::filesystem::path blocked = writer->framePath(3);
   std::filesystem::create_directory(blocked);
-  FramePipeline pipeline(sinks(std::move(writer)), world.particleCount(), 2);
+  FramePipeline pipeline(sinks(std::move(writer)), world->particleCount(), 2);
 
   std::string error;
   for (int n = 1; n <= 8 && error.empty(); ++n) {
     try {
       Frame& frame = pipeline.acquire();
       frame.number = n;
-      std::copy(world.position.begin(), world.position.end(), frame.positions.begin());
+      std::copy(world->restPosition.begin(), world->restPosition.end(), frame.positions.begin());
       pipeline.submit(frame);
     } catch (const Error& e) {
       error = e.what();

@@ -18,7 +18,7 @@ using test::readFile;
 using test::ScratchDirectory;
 
 /// A pressurised ball, a ball without pressure and an open quad.
-World makeMixedWorld() {
+std::shared_ptr<const SceneTopology> makeMixedTopology() {
   SceneSetup setup;
   setup.settings.fps = 30;
   setup.settings.units = "cm";
@@ -35,14 +35,14 @@ World makeMixedWorld() {
   quad.mesh.positions = {{0, 0, 5}, {1, 0, 5}, {1, 1, 5}, {0, 1, 5}};
   quad.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
   setup.bodies.push_back(quad);
-  return buildWorld(setup);
+  return std::make_shared<const SceneTopology>(buildSceneTopology(setup));
 }
 
 TEST(Manifest, DescribesSceneBodiesAndSequences) {
-  const World world = makeMixedWorld();
+  const auto world = makeMixedTopology();
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "mixed");
-  Manifest manifest = describeWorld(world, "mixed", 48);
+  Manifest manifest = describeScene(*world, "mixed", 48);
   manifest.sequences.push_back(writer.sequence());
   writeManifest(dir.path(), manifest);
 
@@ -58,8 +58,8 @@ TEST(Manifest, DescribesSceneBodiesAndSequences) {
   ASSERT_EQ(json["bodies"].size(), 3u);
   const nlohmann::json& ball = json["bodies"][0];
   EXPECT_EQ(ball["name"], "ball");
-  EXPECT_EQ(ball["particles"], world.bodies[0].particleCount);
-  EXPECT_EQ(ball["triangles"], world.bodies[0].triangleCount);
+  EXPECT_EQ(ball["particles"], world->bodies[0].particleCount);
+  EXPECT_EQ(ball["triangles"], world->bodies[0].triangleCount);
   EXPECT_EQ(ball["closed"], true);
   EXPECT_EQ(ball["pressure"], true);
   EXPECT_EQ(json["bodies"][1]["name"], "soft ball");
@@ -82,8 +82,8 @@ TEST(Manifest, DescribesSceneBodiesAndSequences) {
 TEST(Manifest, IsByteIdenticalAcrossRunsAndKeepsKeyOrder) {
   ScratchDirectory first, second;
   for (const ScratchDirectory* dir : {&first, &second}) {
-    const World world = makeMixedWorld();
-    Manifest manifest = describeWorld(world, "mixed", 10, 5);
+    const auto world = makeMixedTopology();
+    Manifest manifest = describeScene(*world, "mixed", 10, 5);
     manifest.sequences.push_back(ObjSequenceWriter(world, dir->path(), "mixed", 5).sequence());
     writeManifest(dir->path(), manifest);
   }

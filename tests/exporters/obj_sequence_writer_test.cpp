@@ -21,16 +21,16 @@ namespace softbake {
 namespace {
 
 using test::listDirectory;
-using test::makeBallsWorld;
+using test::makeBallsTopology;
 using test::readFile;
 using test::ScratchDirectory;
 
 /// The world's rest positions, stretched and rippled so every coordinate is an unremarkable float.
-Frame deformedFrame(const World& world, int number) {
+Frame deformedFrame(const std::shared_ptr<const SceneTopology>& world, int number) {
   Frame frame;
   frame.number = number;
   frame.time = (number - 1) / 24.0;
-  frame.positions = world.position;
+  frame.positions = world->restPosition;
   for (std::size_t i = 0; i < frame.positions.size(); ++i) {
     Vec3& p = frame.positions[i];
     p.x() *= Scalar(1.1);
@@ -100,14 +100,15 @@ ParsedObj parseObj(const std::string& text) {
   return obj;
 }
 
-std::vector<Vec3f> expectedNormals(const World& world, const Frame& frame, const Body& body) {
+std::vector<Vec3f> expectedNormals(const std::shared_ptr<const SceneTopology>& world,
+                                   const Frame& frame, const Body& body) {
   std::vector<Vec3f> normals;
-  computeSmoothNormals(world, frame.positions, body, normals);
+  computeBodyNormals(*world, frame.positions, body, normals);
   return normals;
 }
 
 TEST(ObjSequenceWriter, ReadsBackThroughAssimpWithTheWrittenUvsAndNormals) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   const Frame frame = deformedFrame(world, 2);
@@ -116,9 +117,9 @@ TEST(ObjSequenceWriter, ReadsBackThroughAssimpWithTheWrittenUvsAndNormals) {
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile(writer.framePath(2).string(), aiProcess_Triangulate);
   ASSERT_NE(scene, nullptr) << importer.GetErrorString();
-  ASSERT_EQ(scene->mNumMeshes, world.bodies.size());
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    const Body& body = world.bodies[b];
+  ASSERT_EQ(scene->mNumMeshes, world->bodies.size());
+  for (std::size_t b = 0; b < world->bodies.size(); ++b) {
+    const Body& body = world->bodies[b];
     const aiMesh& mesh = *scene->mMeshes[b];
     ASSERT_EQ(mesh.mNumFaces, body.triangleCount) << body.name;
     ASSERT_TRUE(mesh.HasNormals());
@@ -133,7 +134,7 @@ TEST(ObjSequenceWriter, ReadsBackThroughAssimpWithTheWrittenUvsAndNormals) {
       ASSERT_EQ(face.mNumIndices, 3u);
       for (int k = 0; k < 3; ++k) {
         const unsigned vertex = face.mIndices[k];
-        const Index particle = world.triangles[body.firstTriangle + f][k];
+        const Index particle = world->triangles[body.firstTriangle + f][k];
         const Vec3& p = frame.positions[particle];
         // assimp's own float parser may round the last bit differently; exactness is checked
         // with from_chars below.
@@ -155,7 +156,7 @@ TEST(ObjSequenceWriter, ReadsBackThroughAssimpWithTheWrittenUvsAndNormals) {
 }
 
 TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   const Frame frame = deformedFrame(world, 3);
@@ -171,7 +172,7 @@ TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
 
   std::vector<Vec2f> uvs;
   std::vector<Vec3f> normals;
-  for (const Body& body : world.bodies) {
+  for (const Body& body : world->bodies) {
     uvs.insert(uvs.end(), body.render.uvs.begin(), body.render.uvs.end());
     const std::vector<Vec3f> bodyNormals = expectedNormals(world, frame, body);
     normals.insert(normals.end(), bodyNormals.begin(), bodyNormals.end());
@@ -179,15 +180,15 @@ TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
   EXPECT_EQ(obj.vt, uvs);
   EXPECT_EQ(obj.vn, normals);
 
-  ASSERT_EQ(obj.faces.size(), world.triangles.size());
+  ASSERT_EQ(obj.faces.size(), world->triangles.size());
   long uvOffset = 0;
-  for (std::size_t b = 0; b < world.bodies.size(); ++b) {
-    const Body& body = world.bodies[b];
+  for (std::size_t b = 0; b < world->bodies.size(); ++b) {
+    const Body& body = world->bodies[b];
     EXPECT_EQ(obj.facesPerObject[b], body.triangleCount);
     for (Index f = 0; f < body.triangleCount; ++f)
       for (int k = 0; k < 3; ++k) {
         const auto& corner = obj.faces[body.firstTriangle + f][k];
-        const long particle = long(world.triangles[body.firstTriangle + f][k]) + 1;
+        const long particle = long(world->triangles[body.firstTriangle + f][k]) + 1;
         EXPECT_EQ(corner[0], particle);
         EXPECT_EQ(corner[1], uvOffset + long(body.render.renderTriangles[f][k]) + 1);
         EXPECT_EQ(corner[2], particle);
@@ -197,7 +198,7 @@ TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
 }
 
 TEST(ObjSequenceWriter, HeaderNamesVersionFrameAndTime) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   Frame frame = deformedFrame(world, 25);
@@ -218,7 +219,7 @@ TEST(ObjSequenceWriter, BodyWithoutUvsWritesPositionNormalFaces) {
   body.mesh = makeIcosphere(1, 1.0f);
   body.mesh.uvs.clear();
   setup.bodies.push_back(body);
-  const World world = buildWorld(setup);
+  const auto world = std::make_shared<const SceneTopology>(buildSceneTopology(setup));
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "plain");
   writer.write(deformedFrame(world, 1));
@@ -226,7 +227,7 @@ TEST(ObjSequenceWriter, BodyWithoutUvsWritesPositionNormalFaces) {
   const std::string text = readFile(writer.framePath(1));
   EXPECT_EQ(text.find("vt "), std::string::npos);
   const ParsedObj obj = parseObj(text);
-  ASSERT_EQ(obj.faces.size(), world.triangles.size());
+  ASSERT_EQ(obj.faces.size(), world->triangles.size());
   for (const auto& face : obj.faces)
     for (const auto& corner : face) {
       EXPECT_EQ(corner[1], 0);
@@ -238,13 +239,13 @@ TEST(ObjSequenceWriter, BodyWithoutUvsWritesPositionNormalFaces) {
   const aiScene* scene = importer.ReadFile(writer.framePath(1).string(), aiProcess_Triangulate);
   ASSERT_NE(scene, nullptr) << importer.GetErrorString();
   ASSERT_EQ(scene->mNumMeshes, 1u);
-  EXPECT_EQ(scene->mMeshes[0]->mNumFaces, world.bodies[0].triangleCount);
+  EXPECT_EQ(scene->mMeshes[0]->mNumFaces, world->bodies[0].triangleCount);
   EXPECT_FALSE(scene->mMeshes[0]->HasTextureCoords(0));
   EXPECT_TRUE(scene->mMeshes[0]->HasNormals());
 }
 
 TEST(ObjSequenceWriter, NamesFilesByPaddedFrameNumber) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory dir;
   ObjSequenceWriter four(world, dir.path(), "balls");
   EXPECT_EQ(four.framePath(1), dir.path() / "obj" / "balls_0001.obj");
@@ -268,7 +269,7 @@ TEST(ObjSequenceWriter, NamesFilesByPaddedFrameNumber) {
 }
 
 TEST(ObjSequenceWriter, MaterialLibraryHasADistinctColourPerBody) {
-  const World world = makeBallsWorld({1.0f, 0.8f, 0.6f});
+  const auto world = makeBallsTopology({1.0f, 0.8f, 0.6f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   std::istringstream lines(readFile(writer.materialLibraryPath()));
@@ -301,7 +302,7 @@ TEST(ObjSequenceWriter, ObjectNamesHaveNoSpacesAndAreUnique) {
     body.mesh = makeIcosphere(1, 1.0f, Vec3f(3.0f * float(i), 0, 0));
     setup.bodies.push_back(body);
   }
-  const World world = buildWorld(setup);
+  const auto world = std::make_shared<const SceneTopology>(buildSceneTopology(setup));
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   writer.write(deformedFrame(world, 1));
@@ -310,13 +311,13 @@ TEST(ObjSequenceWriter, ObjectNamesHaveNoSpacesAndAreUnique) {
   EXPECT_EQ(obj.materials, obj.objects);
 }
 
-TEST(ObjSequenceWriter, OutlivesTheWorld) {
+TEST(ObjSequenceWriter, WritesAfterTheCallerLetGoOfTheTopology) {
   ScratchDirectory dir;
   Frame frame;
   std::unique_ptr<ObjSequenceWriter> writer;
   std::string expected;
   {
-    const World world = makeBallsWorld({1.0f, 0.5f});
+    const auto world = makeBallsTopology({1.0f, 0.5f});
     frame = deformedFrame(world, 1);
     writer = std::make_unique<ObjSequenceWriter>(world, dir.path(), "balls");
     ScratchDirectory other;
@@ -329,13 +330,13 @@ TEST(ObjSequenceWriter, OutlivesTheWorld) {
 }
 
 TEST(ObjSequenceWriter, NonFinitePositionIsRefusedNamingBodyAndFrame) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   for (Scalar bad :
        {std::numeric_limits<Scalar>::quiet_NaN(), std::numeric_limits<Scalar>::infinity()}) {
     Frame frame = deformedFrame(world, 7);
-    frame.positions[world.bodies[1].firstParticle + 5].y() = bad;
+    frame.positions[world->bodies[1].firstParticle + 5].y() = bad;
     try {
       writer.write(frame);
       FAIL() << "expected softbake::Error";
@@ -349,7 +350,7 @@ TEST(ObjSequenceWriter, NonFinitePositionIsRefusedNamingBodyAndFrame) {
 }
 
 TEST(ObjSequenceWriter, FailedWriteLeavesNoFileAndNamesIt) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   std::filesystem::create_directory(writer.framePath(2));
@@ -366,7 +367,7 @@ TEST(ObjSequenceWriter, FailedWriteLeavesNoFileAndNamesIt) {
 }
 
 TEST(ObjSequenceWriter, CountsTheBytesItWrote) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   for (int n = 1; n <= 3; ++n) writer.write(deformedFrame(world, n));
@@ -377,7 +378,7 @@ TEST(ObjSequenceWriter, CountsTheBytesItWrote) {
 }
 
 TEST(ObjSequenceWriter, WrongParticleCountIsAnError) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory dir;
   ObjSequenceWriter writer(world, dir.path(), "balls");
   Frame frame = deformedFrame(world, 1);

@@ -4,14 +4,17 @@
 #include <string>
 #include <vector>
 
+#include <memory>
 #include "core/mesh/icosphere.hpp"
-#include "core/scene/world.hpp"
+
+#include "core/scene/scene_topology.hpp"
 #include "tests/support/scratch_directory.hpp"
 
 namespace softbake::test {
 
 /// One icosphere per radius, side by side, named "ball0", "ball1", ...
-inline World makeBallsWorld(std::vector<float> radii, int subdivisions = 2) {
+inline std::shared_ptr<const SceneTopology> makeBallsTopology(std::vector<float> radii,
+                                                              int subdivisions = 2) {
   SceneSetup setup;
   setup.name = "balls";
   for (std::size_t i = 0; i < radii.size(); ++i) {
@@ -20,7 +23,7 @@ inline World makeBallsWorld(std::vector<float> radii, int subdivisions = 2) {
     body.mesh = makeIcosphere(subdivisions, radii[i], Vec3f(3.0f * float(i), 1, 0));
     setup.bodies.push_back(std::move(body));
   }
-  return buildWorld(setup);
+  return std::make_shared<const SceneTopology>(buildSceneTopology(setup));
 }
 
 }  // namespace softbake::test

@@ -20,15 +20,15 @@
 namespace softbake {
 namespace {
 
-using test::makeBallsWorld;
+using test::makeBallsTopology;
 using test::ScratchDirectory;
 
-Frame restFrame(const World& world, int number = 7) {
+Frame restFrame(const std::shared_ptr<const SceneTopology>& world, int number = 7) {
   Frame frame;
   frame.number = number;
   frame.time = (number - 1) / 24.0;
-  frame.positions = world.position;
-  frame.velocities.assign(world.particleCount(), Vec3::Zero());
+  frame.positions = world->restPosition;
+  frame.velocities.assign(world->particleCount(), Vec3::Zero());
   return frame;
 }
 
@@ -60,25 +60,26 @@ struct ReadBack {
 };
 
 /// Enclosed volume by the divergence theorem, in double.
-double meshVolume(const World& world, const Body& body) {
+double meshVolume(const std::shared_ptr<const SceneTopology>& world, const Body& body) {
   double volume = 0;
   for (Index t = body.firstTriangle; t < body.firstTriangle + body.triangleCount; ++t) {
-    const Triangle& tri = world.triangles[t];
-    volume += world.position[tri[0]].cast<double>().dot(world.position[tri[1]].cast<double>().cross(
-                  world.position[tri[2]].cast<double>())) /
+    const Triangle& tri = world->triangles[t];
+    volume += world->restPosition[tri[0]].cast<double>().dot(
+                  world->restPosition[tri[1]].cast<double>().cross(
+                      world->restPosition[tri[2]].cast<double>())) /
               6.0;
   }
   return volume;
 }
 
 TEST(VdbSequenceWriter, WritesNamedGridsClassesAndMetadata) {
-  const World world = makeBallsWorld({1.0f, 0.5f});
+  const auto world = makeBallsTopology({1.0f, 0.5f});
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.05;
   options.fps = 30;
   options.units = "cm";
-  VdbSequenceWriter writer(world, out.path(), "balls", options);
+  VdbSequenceWriter writer(*world, out.path(), "balls", options);
   Frame frame = restFrame(world, 12);
   frame.time = 0.4;
   Contact a, b;
@@ -148,13 +149,13 @@ TEST(VdbSequenceWriter, WritesNamedGridsClassesAndMetadata) {
 }
 
 TEST(VdbSequenceWriter, SingleBodyUsesPlainNamesAndWritesFog) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.1;
   options.fog = true;
   options.compression = VdbOptions::Compression::None;
-  VdbSequenceWriter writer(world, out.path(), "one", options, 3);
+  VdbSequenceWriter writer(*world, out.path(), "one", options, 3);
   writer.write(restFrame(world, 1));  // no contacts: no point grid
   const ReadBack file(out.path() / "vdb" / "one_001.vdb");
   EXPECT_EQ(file.names(), (std::vector<std::string>{"density", "surface", "vel"}));
@@ -169,24 +170,24 @@ TEST(VdbSequenceWriter, SingleBodyUsesPlainNamesAndWritesFog) {
 
 TEST(VdbSequenceWriter, BloscCompressionRoundTrips) {
   if (!bloscAvailable()) GTEST_SKIP() << "this OpenVDB has no Blosc";
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.1;
   options.compression = VdbOptions::Compression::Blosc;
-  VdbSequenceWriter writer(world, out.path(), "b", options);
+  VdbSequenceWriter writer(*world, out.path(), "b", options);
   writer.write(restFrame(world, 2));
   const ReadBack file(out.path() / "vdb" / "b_0002.vdb");
   EXPECT_EQ(file.names(), (std::vector<std::string>{"surface", "vel"}));
 }
 
 TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
-  const World world = makeBallsWorld({1.0f}, 3);
+  const auto world = makeBallsTopology({1.0f}, 3);
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.04;
   options.velocity = false;
-  VdbSequenceWriter writer(world, out.path(), "s", options);
+  VdbSequenceWriter writer(*world, out.path(), "s", options);
   writer.write(restFrame(world));
   const auto surface = ReadBack(writer.framePath(7)).get<openvdb::FloatGrid>("surface");
   ASSERT_TRUE(surface);
@@ -197,10 +198,10 @@ TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
                               {0.5f, 0.5f, 0},
                               {0.2f, 0.3f, 0.5f},
                               {0.7f, 0.1f, 0.2f}};
-  for (const Triangle& t : world.triangles)
+  for (const Triangle& t : world->triangles)
     for (const auto& w : weights) {
-      const Vec3 p =
-          w[0] * world.position[t[0]] + w[1] * world.position[t[1]] + w[2] * world.position[t[2]];
+      const Vec3 p = w[0] * world->restPosition[t[0]] + w[1] * world->restPosition[t[1]] +
+                     w[2] * world->restPosition[t[2]];
       worst = std::max(worst, std::abs(double(sdf.wsSample(openvdb::Vec3d(p.x(), p.y(), p.z())))));
     }
   RecordProperty("worst_distance_in_voxels", std::to_string(worst / options.voxelSize));
@@ -208,12 +209,12 @@ TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
 }
 
 TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
-  const World world = makeBallsWorld({1.0f}, 4);
+  const auto world = makeBallsTopology({1.0f}, 4);
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.05;
   options.velocity = false;
-  VdbSequenceWriter writer(world, out.path(), "s", options);
+  VdbSequenceWriter writer(*world, out.path(), "s", options);
   writer.write(restFrame(world));
   const auto surface = ReadBack(writer.framePath(7)).get<openvdb::FloatGrid>("surface");
   ASSERT_TRUE(surface);
@@ -225,22 +226,22 @@ TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
     const double inside = std::clamp(0.5 - double(*value) / dx, 0.0, 1.0);
     voxels += inside * double(value.getVoxelCount());
   }
-  const double expected = meshVolume(world, world.bodies[0]);
+  const double expected = meshVolume(world, world->bodies[0]);
   RecordProperty("relative_volume_error",
                  std::to_string((voxels * dx * dx * dx - expected) / expected));
   EXPECT_NEAR(voxels * dx * dx * dx, expected, 0.01 * expected);
 }
 
 TEST(VdbSequenceWriter, VelocityAtTheSurfaceMatchesTheParticles) {
-  const World world = makeBallsWorld({1.0f}, 3);
+  const auto world = makeBallsTopology({1.0f}, 3);
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.05;
-  VdbSequenceWriter writer(world, out.path(), "v", options);
+  VdbSequenceWriter writer(*world, out.path(), "v", options);
 
   // The same velocity everywhere: every barycentric blend of it is that velocity.
   Frame uniform = restFrame(world, 1);
-  uniform.velocities.assign(world.particleCount(), Vec3(0.5f, -2.0f, 3.0f));
+  uniform.velocities.assign(world->particleCount(), Vec3(0.5f, -2.0f, 3.0f));
   writer.write(uniform);
   {
     const ReadBack file(writer.framePath(1));
@@ -260,8 +261,8 @@ TEST(VdbSequenceWriter, VelocityAtTheSurfaceMatchesTheParticles) {
   // ω × (voxel − centre) by at most |ω|·d.
   const Vec3 omega(0.3f, 0.0f, 2.0f), centre(0, 1, 0);
   Frame spinning = restFrame(world, 2);
-  for (std::size_t i = 0; i < world.particleCount(); ++i)
-    spinning.velocities[i] = omega.cross(world.position[i] - centre);
+  for (std::size_t i = 0; i < world->particleCount(); ++i)
+    spinning.velocities[i] = omega.cross(world->restPosition[i] - centre);
   writer.write(spinning);
   const ReadBack file(writer.framePath(2));
   const auto surface = file.get<openvdb::FloatGrid>("surface");
@@ -282,14 +283,14 @@ TEST(VdbSequenceWriter, VelocityAtTheSurfaceMatchesTheParticles) {
 }
 
 TEST(VdbSequenceWriter, UpAxisZTurnsYIntoZ) {
-  const World world = makeBallsWorld({1.0f});  // centred at (0, 1, 0)
+  const auto world = makeBallsTopology({1.0f});  // centred at (0, 1, 0)
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.05;
   options.upAxis = 'z';
-  VdbSequenceWriter writer(world, out.path(), "z", options);
+  VdbSequenceWriter writer(*world, out.path(), "z", options);
   Frame frame = restFrame(world);
-  frame.velocities.assign(world.particleCount(), Vec3(0, 1, 0));
+  frame.velocities.assign(world->particleCount(), Vec3(0, 1, 0));
   Contact contact;
   contact.position = Vec3(0, 1, 0);
   contact.normal = Vec3(0, 1, 0);
@@ -322,13 +323,14 @@ TEST(VdbSequenceWriter, UpAxisZTurnsYIntoZ) {
 }
 
 TEST(VdbSequenceWriter, OpenBodyGetsAnUnsignedDistanceField) {
-  World world = makeBallsWorld({1.0f});
-  world.bodies[0].closed = false;
+  SceneTopology open = *makeBallsTopology({1.0f});
+  open.bodies[0].closed = false;
+  const auto world = std::make_shared<const SceneTopology>(std::move(open));
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.1;
   options.fog = true;
-  VdbSequenceWriter writer(world, out.path(), "open", options);
+  VdbSequenceWriter writer(*world, out.path(), "open", options);
   writer.write(restFrame(world));
   const ReadBack file(writer.framePath(7));
   EXPECT_EQ(file.names(), (std::vector<std::string>{"surface_udf", "vel"}));
@@ -338,26 +340,26 @@ TEST(VdbSequenceWriter, OpenBodyGetsAnUnsignedDistanceField) {
 }
 
 TEST(VdbSequenceWriter, AutomaticVoxelSizeIsHalfTheMeanEdge) {
-  const World world = makeBallsWorld({1.0f}, 2);
+  const auto world = makeBallsTopology({1.0f}, 2);
   ScratchDirectory out;
-  VdbSequenceWriter writer(world, out.path(), "auto", VdbOptions{});
-  EXPECT_DOUBLE_EQ(writer.voxelSize(), autoVoxelSize(world));
+  VdbSequenceWriter writer(*world, out.path(), "auto", VdbOptions{});
+  EXPECT_DOUBLE_EQ(writer.voxelSize(), autoVoxelSize(*world));
   // Level 2 of a unit icosphere: edges of about 0.3.
   EXPECT_GT(writer.voxelSize(), 0.1);
   EXPECT_LT(writer.voxelSize(), 0.2);
 }
 
 TEST(VdbSequenceWriter, BadSettingsFailBeforeAnyFileIsWritten) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory out;
   const auto rejects = [&](VdbOptions options, const std::string& needle) {
     try {
-      VdbSequenceWriter writer(world, out.path(), "bad", options);
+      VdbSequenceWriter writer(*world, out.path(), "bad", options);
       ADD_FAILURE() << "accepted settings that should fail with: " << needle;
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
-    EXPECT_THROW(validate(options, world), Error);
+    EXPECT_THROW(validate(options, *world), Error);
   };
   VdbOptions negative;
   negative.voxelSize = -0.1;
@@ -379,11 +381,11 @@ TEST(VdbSequenceWriter, BadSettingsFailBeforeAnyFileIsWritten) {
 }
 
 TEST(VdbSequenceWriter, FrameWithoutVelocitiesFailsAndLeavesNoFile) {
-  const World world = makeBallsWorld({1.0f});
+  const auto world = makeBallsTopology({1.0f});
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.1;
-  VdbSequenceWriter writer(world, out.path(), "nv", options);
+  VdbSequenceWriter writer(*world, out.path(), "nv", options);
   Frame frame = restFrame(world);
   frame.velocities.clear();
   EXPECT_THROW(writer.write(frame), Error);

@@ -46,7 +46,7 @@ TEST(BroadPhaseOnRealMeshes, EveryKindAndLevelFindsBruteForcesPairsWhileTheyDefo
   torus.mesh = unitMesh("torus.STL", Vec3f(0, 0.4f, 0));
   scene.staticMeshes.push_back(std::move(torus));
   scene.settings.collisions.response = ResponseMode::None;  // let them sink into each other
-  Simulator simulator(buildWorld(scene));
+  Simulator simulator(buildSceneTopology(scene));
 
   std::unique_ptr<BroadPhase> brute = makeBroadPhase(BroadPhaseKind::BruteForce);
   std::vector<std::unique_ptr<BroadPhase>> others;
@@ -56,11 +56,12 @@ TEST(BroadPhaseOnRealMeshes, EveryKindAndLevelFindsBruteForcesPairsWhileTheyDefo
   others.push_back(makeBroadPhase(BroadPhaseKind::Bvh));
 
   std::vector<TrianglePair> expected, found;
+  std::vector<Box3> boxes;
   for (int round = 0; round < 3; ++round) {
     for (int s = 0; s < 40; ++s) simulator.step(2);  // deform between the checks
-    World& world = simulator.world();
-    updateCollisionBoxes(world);
-    const BroadPhaseInput input = world.collision.broadPhaseInput();
+    const std::vector<Vec3>& now = simulator.state().position;
+    updateCollisionBoxes(simulator.topology(), {now, now}, boxes);
+    const BroadPhaseInput input = simulator.topology().collision.broadPhaseInput(boxes);
     brute->findPairs(input, expected);
     ASSERT_GT(expected.size(), 1000u) << "the bodies must overlap for the test to mean anything";
     for (std::size_t k = 0; k < others.size(); ++k) {

@@ -19,10 +19,10 @@
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "output/frame_pipeline.hpp"
-#include "tests/support/scratch_directory.hpp"
 #include "render/egl_context.hpp"
 #include "render/frame_renderer.hpp"
 #include "render/png_sequence_renderer.hpp"
+#include "tests/support/scratch_directory.hpp"
 
 namespace softbake {
 namespace {
@@ -33,7 +33,7 @@ using test::ScratchDirectory;
 constexpr int kWidth = 160, kHeight = 120;
 
 /// One ball of radius 0.5 at (0, 1, 0) over the ground plane y = 0.
-World makeBallWorld() {
+std::shared_ptr<const SceneTopology> makeBallTopology() {
   SceneSetup setup;
   setup.name = "ball";
   BodySetup body;
@@ -41,12 +41,12 @@ World makeBallWorld() {
   body.mesh = makeIcosphere(3, 0.5f, Vec3f(0, 1, 0));
   setup.bodies.push_back(std::move(body));
   setup.planes.push_back(PlaneCollider{});
-  return buildWorld(setup);
+  return std::make_shared<const SceneTopology>(buildSceneTopology(setup));
 }
 
-Frame initialFrame(const World& world) {
+Frame initialFrame(const std::shared_ptr<const SceneTopology>& world) {
   Frame frame;
-  frame.positions = world.position;
+  frame.positions = world->restPosition;
   return frame;
 }
 
@@ -83,8 +83,8 @@ bool isGrey(const std::uint8_t* p, int tolerance = 6) {
 }
 
 /// A renderer, or the reason this machine cannot make a GL context at all (then tests skip).
-std::unique_ptr<FrameRenderer> makeRenderer(const World& world, const RenderOptions& options,
-                                            std::string& whyNot) {
+std::unique_ptr<FrameRenderer> makeRenderer(const std::shared_ptr<const SceneTopology>& world,
+                                            const RenderOptions& options, std::string& whyNot) {
   try {
     return std::make_unique<FrameRenderer>(makeRenderScene(world, options), options);
   } catch (const Error& error) {
@@ -102,7 +102,7 @@ std::unique_ptr<FrameRenderer> makeRenderer(const World& world, const RenderOpti
   static_assert(true)
 
 TEST(Camera, AutomaticFramingKeepsTheWholeSceneInTheImage) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   const RenderScene scene = makeRenderScene(world, smallOptions());
   // The bounds reach down to the ground, where the ball will fall.
   EXPECT_NEAR(scene.boundsMin.y(), 0.0f, 1e-5f);
@@ -125,7 +125,7 @@ TEST(Camera, AnExplicitCameraLooksAtItsTarget) {
   RenderOptions options = smallOptions();
   options.cameraPosition = Vec3f(3, 2, 4);
   options.cameraTarget = Vec3f(0, 0.5f, 0);
-  const RenderScene scene = makeRenderScene(makeBallWorld(), options);
+  const RenderScene scene = makeRenderScene(makeBallTopology(), options);
   EXPECT_EQ(scene.camera.position, *options.cameraPosition);
   const auto center = projectToPixel(scene.camera, kWidth, kHeight, *options.cameraTarget);
   ASSERT_TRUE(center.has_value());
@@ -133,11 +133,11 @@ TEST(Camera, AnExplicitCameraLooksAtItsTarget) {
   EXPECT_NEAR(center->y(), kHeight / 2.0f, 1e-3f);
   EXPECT_FALSE(projectToPixel(scene.camera, kWidth, kHeight, Vec3f(6, 4, 8)).has_value());
   options.width = 0;
-  EXPECT_THROW(makeRenderScene(makeBallWorld(), options), Error);
+  EXPECT_THROW(makeRenderScene(makeBallTopology(), options), Error);
 }
 
 TEST(FrameRenderer, RendersTheBodyWhereTheCameraProjectsIt) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   MAKE_RENDERER_OR_SKIP(renderer, world, smallOptions());
   RecordProperty("context", renderer->context().describe());
 
@@ -159,7 +159,7 @@ TEST(FrameRenderer, RendersTheBodyWhereTheCameraProjectsIt) {
 }
 
 TEST(FrameRenderer, RenderingTwiceGivesByteIdenticalPngs) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   MAKE_RENDERER_OR_SKIP(renderer, world, smallOptions());
   ScratchDirectory out;
   Frame frame = initialFrame(world);
@@ -179,7 +179,7 @@ TEST(FrameRenderer, RenderingTwiceGivesByteIdenticalPngs) {
 }
 
 TEST(FrameRenderer, ContactsShowAsGreySpheresWhereTheyAre) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   RenderOptions options = smallOptions();
   options.contactRadius = 0.06f;
   MAKE_RENDERER_OR_SKIP(renderer, world, options);
@@ -217,7 +217,7 @@ TEST(FrameRenderer, ContactsShowAsGreySpheresWhereTheyAre) {
 }
 
 TEST(FrameRenderer, WireframeDrawsEdgesOverTheBody) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   RenderOptions options = smallOptions();
   MAKE_RENDERER_OR_SKIP(plain, world, options);
   options.wireframe = true;
@@ -227,7 +227,7 @@ TEST(FrameRenderer, WireframeDrawsEdgesOverTheBody) {
 }
 
 TEST(PngSequenceRenderer, WritesNumberedPngsFromThePipelineThread) {
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   {
     std::string whyNot;
     if (!makeRenderer(world, smallOptions(), whyNot)) GTEST_SKIP() << whyNot;
@@ -240,12 +240,12 @@ TEST(PngSequenceRenderer, WritesNumberedPngsFromThePipelineThread) {
   EXPECT_EQ(sequence.printfPattern, "png/ball_%04d.png");
   std::vector<std::unique_ptr<FrameSink>> sinks;
   sinks.push_back(std::move(sink));
-  FramePipeline pipeline(std::move(sinks), world.particleCount(), 2);
+  FramePipeline pipeline(std::move(sinks), world->particleCount(), 2);
   for (int number = 1; number <= 3; ++number) {
     Frame& frame = pipeline.acquire();
     frame.number = number;
-    for (std::size_t i = 0; i < world.particleCount(); ++i)
-      frame.positions[i] = world.position[i] - Vec3(0, 0.1f * Scalar(number - 1), 0);
+    for (std::size_t i = 0; i < world->particleCount(); ++i)
+      frame.positions[i] = world->restPosition[i] - Vec3(0, 0.1f * Scalar(number - 1), 0);
     pipeline.submit(frame);
   }
   pipeline.finish();
@@ -277,7 +277,7 @@ TEST(EglContext, AnInvalidPlatformFailsWithTheDebianPackages) {
 
 TEST(EglContext, TheEnvironmentVariableForcesThePlatform) {
   ::setenv("SOFTBAKE_EGL_PLATFORM", "0x1234", 1);
-  const World world = makeBallWorld();
+  const auto world = makeBallTopology();
   PngSequenceRenderer sink(world, std::filesystem::temp_directory_path() / "softbake-render-env",
                            "ball", smallOptions());
   // The constructor needs no context; the first write() fails cleanly on the sink's thread.

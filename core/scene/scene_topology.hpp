@@ -1,11 +1,16 @@
 #pragma once
-/// The simulation's state: every body's particles, springs and triangles in flat arrays.
+/// The immutable half of a simulation: every body's particles' rest data, springs, triangles and
+/// render maps in flat arrays, the colliders and the settings. Built once by buildSceneTopology()
+/// and shared, read-only, by the simulator, the exporters and the renderer (Jolt splits
+/// SoftBodySharedSettings from SoftBodyMotionProperties the same way): what changes from step to
+/// step is a SimulationState (core/scene/simulation_state.hpp), and each stage's scratch belongs to
+/// the stage.
 ///
 /// All bodies share one set of arrays (a body is a range in each), so every stage is one parallel
 /// loop over the whole scene and the collision stages can address any particle or triangle by a
-/// single global index. Setup data (topology, rest lengths, masses) is built once by buildWorld();
-/// the stepper only rewrites positions, velocities and the scratch arrays, never reallocates.
+/// single global index.
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -37,6 +42,7 @@ struct Body {
   Index firstSpring = 0, springCount = 0;
   Material material;
   Scalar mass = 1;
+  Vec3 initialVelocity = Vec3::Zero();  ///< of every particle, m/s
   /// Closed and consistently wound: has a volume, so the gas pressure acts.
   bool closed = false;
   bool selfCollision = false;
@@ -50,19 +56,16 @@ struct TriangleChunk {
   Index body, begin, end;
 };
 
-struct World {
+struct SceneTopology {
+  SimulationSettings settings;
   std::vector<Body> bodies;
   std::vector<PlaneCollider> planes;
   std::vector<StaticMeshCollider> staticMeshes;
-  SimulationSettings settings;
 
-  // Particle state, hot: touched every substep.
-  std::vector<Vec3> position;
-  std::vector<Vec3> previousPosition;  ///< start of the current substep: collision segments
-  std::vector<Vec3> velocity;
+  // Per particle. Mass and inverse mass are read every substep; the rest only at setup.
   std::vector<Scalar> inverseMass;  ///< 0 for pinned particles
-  // Particle data, cold.
   std::vector<Scalar> mass;
+  std::vector<Vec3> restPosition;  ///< welded positions at the start: the initial state
   std::vector<Index> particleBody;
 
   std::vector<Triangle> triangles;  ///< global particle indices, counter-clockwise from outside
@@ -73,27 +76,28 @@ struct World {
   // 2·spring + (1 if the particle is the spring's `b` end).
   std::vector<Index> springRowStart, springRefs;
   std::vector<Index> triangleRowStart, triangleRefs;
-
-  // Scratch, sized once by buildWorld().
-  std::vector<Vec3> springForce;    ///< force on each spring's `a` end
-  std::vector<Vec3> triangleForce;  ///< pressure force on each corner of each triangle
   std::vector<TriangleChunk> volumeChunks;
-  std::vector<double> chunkVolume;
-  std::vector<double> bodyVolume;    ///< current enclosed volume per body
-  std::vector<Scalar> bodyPressure;  ///< current gas pressure per body, Pa
 
   CollisionGeometry collision;  ///< soft and static triangles for the collision pipeline
 
-  std::size_t particleCount() const { return position.size(); }
+  std::size_t particleCount() const { return mass.size(); }
+  /// The body's triangles, in global particle indices.
+  std::span<const Triangle> bodyTriangles(const Body& body) const {
+    return std::span(triangles).subspan(body.firstTriangle, body.triangleCount);
+  }
 };
 
-/// What buildWorld() did that the user should hear about, one line each.
+/// Smooth normals of `body` at `positions` (every particle, global order), body-local in `out`.
+void computeBodyNormals(const SceneTopology& topology, std::span<const Vec3> positions,
+                        const Body& body, std::vector<Vec3f>& out);
+
+/// What buildSceneTopology() did that the user should hear about, one line each.
 struct BuildReport {
   std::vector<std::string> notes;
 };
 
 /// Welds, builds springs, masses and incidence for every body. Throws softbake::Error for a body
 /// with no usable triangles or a pin index out of range.
-World buildWorld(const SceneSetup& setup, BuildReport* report = nullptr);
+SceneTopology buildSceneTopology(const SceneSetup& setup, BuildReport* report = nullptr);
 
 }  // namespace softbake
