@@ -1,8 +1,5 @@
 #include "render/frame_renderer.hpp"
 
-#define GL_GLEXT_PROTOTYPES
-#include <GL/gl.h>
-#include <GL/glext.h>
 #include <zlib.h>
 
 #include <cstdlib>
@@ -30,55 +27,22 @@ unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "render/gl_resources.hpp"
+#include "render/shaders.hpp"
 
 namespace softbake {
 
 namespace {
 
-constexpr float kDegrees = std::numbers::pi_v<float> / 180.0f;
 /// Background, written to the image as is (sRGB).
 constexpr float kBackground[3] = {0.86f, 0.87f, 0.89f};
 /// The blob shadows of this many bodies, the first ones, reach the ground shader.
 constexpr int kMaxShadows = 16;
-
-// ---- camera --------------------------------------------------------------------------------
-
-Eigen::Matrix4f lookAt(const Camera& camera) {
-  const Vec3f forward = (camera.target - camera.position).normalized();
-  const Vec3f side = forward.cross(camera.up).normalized();
-  const Vec3f up = side.cross(forward);
-  Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
-  view.block<1, 3>(0, 0) = side.transpose();
-  view.block<1, 3>(1, 0) = up.transpose();
-  view.block<1, 3>(2, 0) = -forward.transpose();
-  view(0, 3) = -side.dot(camera.position);
-  view(1, 3) = -up.dot(camera.position);
-  view(2, 3) = forward.dot(camera.position);
-  return view;
-}
-
-Eigen::Matrix4f perspective(float fovDegrees, float aspect, float near, float far) {
-  const float f = 1.0f / std::tan(0.5f * fovDegrees * kDegrees);
-  Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
-  projection(0, 0) = f / aspect;
-  projection(1, 1) = f;
-  projection(2, 2) = (far + near) / (near - far);
-  projection(2, 3) = 2 * far * near / (near - far);
-  projection(3, 2) = -1;
-  return projection;
-}
-
-/// Any unit vector perpendicular to `n`.
-Vec3f perpendicular(const Vec3f& n) {
-  const Vec3f other = std::abs(n.z()) < 0.9f ? Vec3f::UnitZ() : Vec3f::UnitX();
-  return (other - n * n.dot(other)).normalized();
-}
 
 /// Area-weighted vertex normals of a static mesh (its own render vertices).
 std::vector<Vec3f> meshNormals(const TriangleMesh& mesh) {
@@ -95,211 +59,9 @@ std::vector<Vec3f> meshNormals(const TriangleMesh& mesh) {
   return normals;
 }
 
-// ---- GL helpers ------------------------------------------------------------------------------
-
-constexpr const char* kSurfaceVertex = R"(#version 330 core
-layout(location = 0) in vec3 aPosition;
-layout(location = 1) in vec3 aNormal;
-layout(location = 2) in vec3 aOffset;
-uniform mat4 uViewProjection;
-uniform float uScale;
-out vec3 vPosition;
-out vec3 vNormal;
-void main() {
-  vPosition = aPosition * uScale + aOffset;
-  vNormal = aNormal;
-  gl_Position = uViewProjection * vec4(vPosition, 1.0);
-}
-)";
-
-// Lambert from a key and a fill light plus Blinn-Phong on the key, over a sky/ground hemisphere
-// ambient. Lights are white so grey materials stay grey. Output is gamma encoded.
-constexpr const char* kSurfaceFragment = R"(#version 330 core
-in vec3 vPosition;
-in vec3 vNormal;
-uniform vec3 uColor;
-uniform vec3 uEye;
-uniform vec3 uKey;
-uniform vec3 uFill;
-uniform vec3 uUp;
-uniform float uSpecular;
-uniform int uFlat;
-out vec4 outColor;
-void main() {
-  if (uFlat == 1) {
-    outColor = vec4(pow(uColor, vec3(1.0 / 2.2)), 1.0);
-    return;
-  }
-  vec3 n = normalize(vNormal);
-  vec3 v = normalize(uEye - vPosition);
-  if (dot(n, v) < 0.0) n = -n;  // the inside of an open mesh
-  float key = max(dot(n, uKey), 0.0);
-  float fill = max(dot(n, uFill), 0.0);
-  float hemi = 0.5 + 0.5 * dot(n, uUp);
-  vec3 ambient = mix(vec3(0.08), vec3(0.22), hemi);
-  float specular = key > 0.0 ? pow(max(dot(n, normalize(uKey + v)), 0.0), 48.0) * uSpecular : 0.0;
-  vec3 color = uColor * (ambient + 0.80 * key + 0.28 * fill) + vec3(specular);
-  outColor = vec4(pow(clamp(color, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
-}
-)";
-
-constexpr const char* kGroundVertex = R"(#version 330 core
-layout(location = 0) in vec3 aPosition;
-uniform mat4 uViewProjection;
-out vec3 vPosition;
-void main() {
-  vPosition = aPosition;
-  gl_Position = uViewProjection * vec4(aPosition, 1.0);
-}
-)";
-
-// A procedural grid (anti-aliased with fwidth), soft blob shadows under the bodies, and a fade to
-// the background towards the horizon.
-constexpr const char* kGroundFragment = R"(#version 330 core
-in vec3 vPosition;
-uniform vec3 uOrigin;
-uniform vec3 uAxisU;
-uniform vec3 uAxisV;
-uniform vec3 uNormal;
-uniform vec3 uEye;
-uniform vec3 uKey;
-uniform float uSpacing;
-uniform vec2 uFade;
-uniform vec3 uBackground;
-uniform int uShadowCount;
-uniform vec4 uShadows[16];
-out vec4 outColor;
-float gridLine(vec2 uv) {
-  vec2 d = abs(fract(uv - 0.5) - 0.5) / max(fwidth(uv), vec2(1e-6));
-  return 1.0 - min(min(d.x, d.y), 1.0);
-}
-void main() {
-  vec3 p = vPosition - uOrigin;
-  vec2 uv = vec2(dot(p, uAxisU), dot(p, uAxisV)) / uSpacing;
-  // Lines fade out where cells shrink to a few pixels, before they would alias into moiré.
-  float density = max(fwidth(uv).x, fwidth(uv).y);
-  float line = max(0.45 * gridLine(uv) * (1.0 - smoothstep(0.15, 0.4, density)),
-                   0.8 * gridLine(uv / 4.0) * (1.0 - smoothstep(0.6, 1.6, density)));
-  vec3 color = mix(vec3(0.50), vec3(0.30), line);
-  color *= 0.55 + 0.45 * max(dot(uNormal, uKey), 0.0);
-  float light = 1.0;
-  for (int i = 0; i < uShadowCount; ++i) {
-    vec3 d = vPosition - uShadows[i].xyz;
-    float r = uShadows[i].w;
-    float height = max(-dot(d, uNormal), 0.0);
-    vec3 lateral = d + height * uNormal;
-    float sigma = r * 0.9 + 0.5 * max(height - r, 0.0);
-    float strength = 0.6 * clamp(r / max(height, r), 0.0, 1.0);
-    light *= 1.0 - strength * exp(-dot(lateral, lateral) / (sigma * sigma));
-  }
-  color = pow(clamp(color * light, 0.0, 1.0), vec3(1.0 / 2.2));
-  float fade = smoothstep(uFade.x, uFade.y, length(vPosition - uEye));
-  outColor = vec4(mix(color, uBackground, fade), 1.0);
-}
-)";
-
-GLuint compileShader(GLenum type, const char* source) {
-  const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    glDeleteShader(shader);
-    throw Error(cat("renderer: the OpenGL driver rejected a shader: ", log));
-  }
-  return shader;
-}
-
-GLuint linkProgram(const char* vertex, const char* fragment) {
-  const GLuint vs = compileShader(GL_VERTEX_SHADER, vertex);
-  const GLuint fs = compileShader(GL_FRAGMENT_SHADER, fragment);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw Error(cat("renderer: the OpenGL driver could not link a shader program: ", log));
-  }
-  return program;
-}
-
-void checkGl(const char* what) {
-  const GLenum error = glGetError();
-  if (error != GL_NO_ERROR)
-    throw Error(cat("renderer: OpenGL error 0x", std::hex, error, " ", what));
-}
-
-void uniform(GLuint program, const char* name, const Vec3f& v) {
-  glUniform3f(glGetUniformLocation(program, name), v.x(), v.y(), v.z());
-}
-void uniform(GLuint program, const char* name, float v) {
-  glUniform1f(glGetUniformLocation(program, name), v);
-}
-void uniform(GLuint program, const char* name, int v) {
-  glUniform1i(glGetUniformLocation(program, name), v);
-}
-void uniform(GLuint program, const char* name, const Eigen::Matrix4f& m) {
-  glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, m.data());  // column-major
-}
-
-/// A vertex array of interleaved position + normal floats and triangle indices.
-struct MeshBuffers {
-  GLuint vao = 0, vertices = 0, indices = 0;
-  GLsizei indexCount = 0;
-
-  void create(const std::vector<float>& interleaved, const std::vector<Index>& triangleIndices,
-              GLenum usage) {
-    glGenVertexArrays(1, &vao);
-    glGenBuffers(1, &vertices);
-    glGenBuffers(1, &indices);
-    glBindVertexArray(vao);
-    glBindBuffer(GL_ARRAY_BUFFER, vertices);
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)),
-                 interleaved.data(), usage);
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-    glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
-                          reinterpret_cast<const void*>(3 * sizeof(float)));
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(triangleIndices.size() * sizeof(Index)),
-                 triangleIndices.data(), GL_STATIC_DRAW);
-    indexCount = GLsizei(triangleIndices.size());
-    glBindVertexArray(0);
-  }
-  void destroy() {
-    glDeleteBuffers(1, &vertices);
-    glDeleteBuffers(1, &indices);
-    glDeleteVertexArrays(1, &vao);
-  }
-};
-
 }  // namespace
 
 // ---- scene ---------------------------------------------------------------------------------
-
-Eigen::Matrix4f viewProjection(const Camera& camera, int width, int height) {
-  return perspective(camera.fovDegrees, float(width) / float(height), camera.near, camera.far) *
-         lookAt(camera);
-}
-
-std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, int height,
-                                              const Vec3f& point) {
-  const Eigen::Vector4f clip = viewProjection(camera, width, height) * point.homogeneous();
-  if (clip.w() <= 0) return std::nullopt;
-  const float x = clip.x() / clip.w(), y = clip.y() / clip.w();
-  return Eigen::Vector2f(0.5f * (x + 1) * float(width), 0.5f * (1 - y) * float(height));
-}
 
 Vec3f bodyColor(const RenderOptions& options, std::size_t index) {
   if (index < options.bodyColors.size() && options.bodyColors[index].x() >= 0)
@@ -372,47 +134,12 @@ RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
   scene.size = std::max(bounds.diagonal().norm(), 1e-3f);
   scene.contactRadius = options.contactRadius > 0 ? options.contactRadius : 0.015f * scene.size;
 
-  Camera& camera = scene.camera;
-  camera.fovDegrees = options.fovDegrees;
-  camera.up = topology.planes.empty()
-                  ? Vec3f::UnitY()
-                  : Vec3f(topology.planes.front().normal.cast<float>().normalized());
-  const Vec3f center = bounds.center();
-  camera.target = options.cameraTarget.value_or(center);
-  if (options.cameraPosition) {
-    camera.position = *options.cameraPosition;
-  } else {
-    // Fixed view direction, 30° around and 22° above the scene; the distance is the least at
-    // which every corner of the bounds lies inside 85% of both fields of view.
-    const float aspect = float(options.width) / float(options.height);
-    const float tanY = 0.85f * std::tan(0.5f * options.fovDegrees * kDegrees), tanX = tanY * aspect;
-    const Vec3f front = std::abs(camera.up.dot(Vec3f::UnitZ())) < 0.9f
-                            ? Vec3f(Vec3f::UnitZ() - camera.up * camera.up.z()).normalized()
-                            : perpendicular(camera.up);
-    const Vec3f side = camera.up.cross(front).normalized();
-    const float azimuth = 30 * kDegrees, elevation = 22 * kDegrees;
-    const Vec3f horizontalDirection = front * std::cos(azimuth) + side * std::sin(azimuth);
-    const Vec3f direction =
-        horizontalDirection * std::cos(elevation) + camera.up * std::sin(elevation);
-    const Vec3f viewRight = (-direction).cross(camera.up).normalized();
-    const Vec3f viewUp = viewRight.cross(-direction);
-    float distance = 0;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Vec3f offset = bounds.corner(Eigen::AlignedBox3f::CornerType(corner)) - camera.target;
-      // Depth along the view is distance − offset·direction; the offset must fit in it.
-      distance = std::max({distance, std::abs(offset.dot(viewRight)) / tanX + offset.dot(direction),
-                           std::abs(offset.dot(viewUp)) / tanY + offset.dot(direction)});
-    }
-    distance = std::max(distance, 0.1f * scene.size);
-    camera.position = camera.target + direction * distance;
-  }
-  if ((camera.position - camera.target).norm() < 1e-6f)
-    throw Error("renderer: the camera position and target are the same point");
-  if (std::abs((camera.target - camera.position).normalized().dot(camera.up)) > 0.999f)
-    camera.up = perpendicular(camera.up);
-  const float distance = (camera.position - camera.target).norm();
-  camera.near = 0.02f * distance;
-  camera.far = distance + 12 * scene.size;
+  const Vec3f up = topology.planes.empty()
+                       ? Vec3f::UnitY()
+                       : Vec3f(topology.planes.front().normal.cast<float>().normalized());
+  scene.camera = frameCamera(bounds, scene.size, up,
+                             {options.cameraPosition, options.cameraTarget, options.fovDegrees,
+                              float(options.width) / float(options.height)});
   return scene;
 }
 
@@ -440,9 +167,17 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
       context_(std::make_unique<EglContext>(options_.egl)),
       gl_(std::make_unique<Gl>()) {
   Gl& gl = *gl_;
-  gl.surfaceProgram = linkProgram(kSurfaceVertex, kSurfaceFragment);
-  gl.groundProgram = linkProgram(kGroundVertex, kGroundFragment);
+  gl.surfaceProgram = linkProgram(kSurfaceVertexShader, kSurfaceFragmentShader);
+  gl.groundProgram = linkProgram(kGroundVertexShader, kGroundFragmentShader);
+  createMeshes();
+  createFramebuffers();
+  checkGl("while setting up the renderer");
+}
 
+/// The bodies' buffers (refilled every frame), the static meshes, the contact sphere and the
+/// ground quad.
+void FrameRenderer::createMeshes() {
+  Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
   for (const Body& body : topology.bodies) {
     std::vector<Index> indices;
@@ -503,8 +238,11 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
     // Counter-clockwise seen from above: u × v = normal.
     gl.ground.create(interleaved, {0, 1, 2, 0, 2, 3}, GL_STATIC_DRAW);
   }
+}
 
-  // Framebuffers: multisampled colour + depth, resolved into a single-sampled one for reading.
+/// Multisampled colour + depth, resolved into a single-sampled framebuffer for reading.
+void FrameRenderer::createFramebuffers() {
+  Gl& gl = *gl_;
   GLint maxSamples = 1;
   glGetIntegerv(GL_MAX_SAMPLES, &maxSamples);
   gl.samples = std::clamp(options_.samples, 1, std::max(1, int(maxSamples)));
@@ -528,7 +266,6 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
   makeFramebuffer(gl.resolveFbo, gl.resolveColor, gl.resolveDepth, 0);
   if (gl.samples > 1)
     makeFramebuffer(gl.multisampleFbo, gl.multisampleColor, gl.multisampleDepth, gl.samples);
-  checkGl("while setting up the renderer");
 }
 
 FrameRenderer::~FrameRenderer() {
@@ -572,15 +309,28 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);  // open meshes show their inside
 
-  const Eigen::Matrix4f vp = viewProjection(camera, w, h);
+  Lighting lighting;
+  lighting.viewProjection = viewProjection(camera, w, h);
   const Vec3f forward = (camera.target - camera.position).normalized();
   const Vec3f side = forward.cross(camera.up).normalized();
   const Vec3f up = side.cross(forward);
   // Key from above, left and behind the camera; fill from the right, low.
-  const Vec3f key = (-forward * 0.6f + up * 1.0f - side * 0.5f).normalized();
-  const Vec3f fill = (-forward * 0.8f + up * 0.1f + side * 0.9f).normalized();
+  lighting.key = (-forward * 0.6f + up * 1.0f - side * 0.5f).normalized();
+  lighting.fill = (-forward * 0.8f + up * 0.1f + side * 0.9f).normalized();
 
-  // Bodies' positions and smooth normals for this frame, and their blob shadows.
+  const std::vector<float> shadows = uploadBodies(frame);
+  drawSurfaces(lighting);
+  drawContacts(frame);
+  drawGround(lighting, shadows);
+  glBindVertexArray(0);
+  return readImage(frame.number);
+}
+
+/// Bodies' positions and smooth normals for this frame; returns their blob shadows (centre and
+/// radius of the first kMaxShadows bodies).
+std::vector<float> FrameRenderer::uploadBodies(const Frame& frame) {
+  Gl& gl = *gl_;
+  const SceneTopology& topology = *scene_.topology;
   std::vector<float> shadows;
   const std::span<const Vec3> positions(frame.positions);
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
@@ -608,11 +358,19 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
     }
   }
 
+  return shadows;
+}
+
+/// Bodies in their colours and static meshes in grey; with the wireframe, the edges over them.
+void FrameRenderer::drawSurfaces(const Lighting& lighting) {
+  Gl& gl = *gl_;
+  const SceneTopology& topology = *scene_.topology;
+  const Camera& camera = scene_.camera;
   glUseProgram(gl.surfaceProgram);
-  uniform(gl.surfaceProgram, "uViewProjection", vp);
+  uniform(gl.surfaceProgram, "uViewProjection", lighting.viewProjection);
   uniform(gl.surfaceProgram, "uEye", camera.position);
-  uniform(gl.surfaceProgram, "uKey", key);
-  uniform(gl.surfaceProgram, "uFill", fill);
+  uniform(gl.surfaceProgram, "uKey", lighting.key);
+  uniform(gl.surfaceProgram, "uFill", lighting.fill);
   uniform(gl.surfaceProgram, "uUp", camera.up);
   uniform(gl.surfaceProgram, "uScale", 1.0f);
   uniform(gl.surfaceProgram, "uFlat", 0);
@@ -646,57 +404,69 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     uniform(gl.surfaceProgram, "uFlat", 0);
   }
+}
 
-  if (options_.contacts && !frame.contacts.empty()) {
-    gl.offsets.clear();
-    for (const Contact& c : frame.contacts) {
-      const Vec3f p = c.position.cast<float>();
-      gl.offsets.insert(gl.offsets.end(), {p.x(), p.y(), p.z()});
-    }
-    const auto count = GLsizeiptr(frame.contacts.size());
-    glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
-    if (count > gl.contactCapacity) {
-      gl.contactCapacity = std::max(count, 2 * gl.contactCapacity);
-      glBufferData(GL_ARRAY_BUFFER, gl.contactCapacity * 3 * GLsizeiptr(sizeof(float)), nullptr,
-                   GL_STREAM_DRAW);
-    }
-    glBufferSubData(GL_ARRAY_BUFFER, 0, count * 3 * GLsizeiptr(sizeof(float)), gl.offsets.data());
-    uniform(gl.surfaceProgram, "uScale", scene_.contactRadius);
-    uniform(gl.surfaceProgram, "uColor", options_.contactColor);
-    uniform(gl.surfaceProgram, "uSpecular", 0.15f);
-    glBindVertexArray(gl.sphere.vao);
-    glDrawElementsInstanced(GL_TRIANGLES, gl.sphere.indexCount, GL_UNSIGNED_INT, nullptr,
-                            GLsizei(count));
+/// The contacts as instanced spheres.
+void FrameRenderer::drawContacts(const Frame& frame) {
+  Gl& gl = *gl_;
+  if (!options_.contacts || frame.contacts.empty()) return;
+  gl.offsets.clear();
+  for (const Contact& c : frame.contacts) {
+    const Vec3f p = c.position.cast<float>();
+    gl.offsets.insert(gl.offsets.end(), {p.x(), p.y(), p.z()});
   }
-
-  if (gl.ground.indexCount > 0) {
-    const PlaneCollider& planePoint = topology.planes.front();
-    const Vec3f normal = planePoint.normal.cast<float>().normalized();
-    const Vec3f u = perpendicular(normal), v = normal.cross(u);
-    // Bold lines every power of ten below the scene's size, thin ones at a quarter of that.
-    const float spacing = 0.25f * std::pow(10.0f, std::floor(std::log10(scene_.size)));
-    const float distance = (camera.position - camera.target).norm();
-    glUseProgram(gl.groundProgram);
-    uniform(gl.groundProgram, "uViewProjection", vp);
-    uniform(gl.groundProgram, "uOrigin", Vec3f(planePoint.point.cast<float>()));
-    uniform(gl.groundProgram, "uAxisU", u);
-    uniform(gl.groundProgram, "uAxisV", v);
-    uniform(gl.groundProgram, "uNormal", normal);
-    uniform(gl.groundProgram, "uEye", camera.position);
-    uniform(gl.groundProgram, "uKey", key);
-    uniform(gl.groundProgram, "uSpacing", spacing);
-    glUniform2f(glGetUniformLocation(gl.groundProgram, "uFade"), distance + 0.5f * scene_.size,
-                distance + 6 * scene_.size);
-    uniform(gl.groundProgram, "uBackground", Vec3f(kBackground[0], kBackground[1], kBackground[2]));
-    uniform(gl.groundProgram, "uShadowCount", int(shadows.size() / 4));
-    if (!shadows.empty())
-      glUniform4fv(glGetUniformLocation(gl.groundProgram, "uShadows"), GLsizei(shadows.size() / 4),
-                   shadows.data());
-    glBindVertexArray(gl.ground.vao);
-    glDrawElements(GL_TRIANGLES, gl.ground.indexCount, GL_UNSIGNED_INT, nullptr);
+  const auto count = GLsizeiptr(frame.contacts.size());
+  glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
+  if (count > gl.contactCapacity) {
+    gl.contactCapacity = std::max(count, 2 * gl.contactCapacity);
+    glBufferData(GL_ARRAY_BUFFER, gl.contactCapacity * 3 * GLsizeiptr(sizeof(float)), nullptr,
+                 GL_STREAM_DRAW);
   }
-  glBindVertexArray(0);
+  glBufferSubData(GL_ARRAY_BUFFER, 0, count * 3 * GLsizeiptr(sizeof(float)), gl.offsets.data());
+  uniform(gl.surfaceProgram, "uScale", scene_.contactRadius);
+  uniform(gl.surfaceProgram, "uColor", options_.contactColor);
+  uniform(gl.surfaceProgram, "uSpecular", 0.15f);
+  glBindVertexArray(gl.sphere.vao);
+  glDrawElementsInstanced(GL_TRIANGLES, gl.sphere.indexCount, GL_UNSIGNED_INT, nullptr,
+                          GLsizei(count));
+}
 
+/// The ground quad: grid, blob shadows, fade towards the horizon.
+void FrameRenderer::drawGround(const Lighting& lighting, const std::vector<float>& shadows) {
+  Gl& gl = *gl_;
+  const SceneTopology& topology = *scene_.topology;
+  const Camera& camera = scene_.camera;
+  if (gl.ground.indexCount == 0) return;
+  const PlaneCollider& planePoint = topology.planes.front();
+  const Vec3f normal = planePoint.normal.cast<float>().normalized();
+  const Vec3f u = perpendicular(normal), v = normal.cross(u);
+  // Bold lines every power of ten below the scene's size, thin ones at a quarter of that.
+  const float spacing = 0.25f * std::pow(10.0f, std::floor(std::log10(scene_.size)));
+  const float distance = (camera.position - camera.target).norm();
+  glUseProgram(gl.groundProgram);
+  uniform(gl.groundProgram, "uViewProjection", lighting.viewProjection);
+  uniform(gl.groundProgram, "uOrigin", Vec3f(planePoint.point.cast<float>()));
+  uniform(gl.groundProgram, "uAxisU", u);
+  uniform(gl.groundProgram, "uAxisV", v);
+  uniform(gl.groundProgram, "uNormal", normal);
+  uniform(gl.groundProgram, "uEye", camera.position);
+  uniform(gl.groundProgram, "uKey", lighting.key);
+  uniform(gl.groundProgram, "uSpacing", spacing);
+  glUniform2f(glGetUniformLocation(gl.groundProgram, "uFade"), distance + 0.5f * scene_.size,
+              distance + 6 * scene_.size);
+  uniform(gl.groundProgram, "uBackground", Vec3f(kBackground[0], kBackground[1], kBackground[2]));
+  uniform(gl.groundProgram, "uShadowCount", int(shadows.size() / 4));
+  if (!shadows.empty())
+    glUniform4fv(glGetUniformLocation(gl.groundProgram, "uShadows"), GLsizei(shadows.size() / 4),
+                 shadows.data());
+  glBindVertexArray(gl.ground.vao);
+  glDrawElements(GL_TRIANGLES, gl.ground.indexCount, GL_UNSIGNED_INT, nullptr);
+}
+
+/// Resolves the multisampled image and reads it back, top row first.
+std::vector<std::uint8_t> FrameRenderer::readImage(int frameNumber) {
+  Gl& gl = *gl_;
+  const int w = options_.width, h = options_.height;
   if (gl.samples > 1) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.multisampleFbo);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.resolveFbo);
@@ -706,7 +476,7 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   gl.pixels.resize(std::size_t(w) * std::size_t(h) * 3);
   glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, gl.pixels.data());
-  checkGl(cat("while rendering frame ", frame.number).c_str());
+  checkGl(cat("while rendering frame ", frameNumber).c_str());
 
   // OpenGL's rows start at the bottom, PNG's at the top.
   std::vector<std::uint8_t> image(gl.pixels.size());

@@ -18,6 +18,7 @@
 
 #include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
+#include "render/camera.hpp"
 #include "render/egl_context.hpp"
 
 namespace softbake {
@@ -37,23 +38,6 @@ struct RenderOptions {
   std::vector<Vec3f> bodyColors;
   EglOptions egl;
 };
-
-/// A pinhole camera looking from `position` at `target`, `up` the world's up (the ground's normal).
-struct Camera {
-  Vec3f position = Vec3f(0, 0, 5);
-  Vec3f target = Vec3f::Zero();
-  Vec3f up = Vec3f::UnitY();
-  float fovDegrees = 40;
-  float near = 0.01f, far = 100;  ///< clip distances, m
-};
-
-/// World → clip space (OpenGL conventions: right-handed view, depth −1..1).
-Eigen::Matrix4f viewProjection(const Camera& camera, int width, int height);
-
-/// Where `point` lands in the PNG: x to the right, y down from the top row, in pixels (the centre
-/// of pixel (i, j) is (i + 0.5, j + 0.5)). Empty when the point is behind the camera.
-std::optional<Eigen::Vector2f> projectToPixel(const Camera& camera, int width, int height,
-                                              const Vec3f& point);
 
 /// What the renderer draws besides the frame: the scene's topology (bodies, static meshes, the
 /// ground), and the camera and sizes fixed once for the whole sequence. Built on any thread;
@@ -103,6 +87,19 @@ class FrameRenderer {
 
  private:
   struct Gl;
+  /// The view and the two lights of a frame.
+  struct Lighting {
+    Eigen::Matrix4f viewProjection;
+    Vec3f key, fill;  ///< unit directions towards the lights
+  };
+
+  void createMeshes();
+  void createFramebuffers();
+  std::vector<float> uploadBodies(const Frame& frame);
+  void drawSurfaces(const Lighting& lighting);
+  void drawContacts(const Frame& frame);
+  void drawGround(const Lighting& lighting, const std::vector<float>& shadows);
+  std::vector<std::uint8_t> readImage(int frameNumber);
   RenderScene scene_;
   RenderOptions options_;
   std::unique_ptr<EglContext> context_;

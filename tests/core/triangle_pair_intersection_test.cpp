@@ -81,7 +81,7 @@ TEST(TrianglePair, DisjointAndParallelTrianglesDoNotHit) {
 }
 
 TEST(TrianglePair, CoplanarOverlapIsNotReportedButTheReferenceSeesIt) {
-  // Documented limitation (triangle_pair_test.hpp): in-plane edges cross nothing.
+  // Documented limitation (triangle_pair_intersection.hpp): in-plane edges cross nothing.
   const TriangleCorners shifted = {Vec3(1, 1, 0), Vec3(9, 1, 0), Vec3(1, 9, 0)};
   TrianglePairHits hits;
   EXPECT_FALSE(intersectTrianglePair(kFloor, shifted, hits));

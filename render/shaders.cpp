@@ -1,0 +1,107 @@
+// The GLSL of the renderer (OpenGL 3.3 core, so the same code runs on llvmpipe and on GPUs).
+#include "render/shaders.hpp"
+
+namespace softbake {
+
+const char* const kSurfaceVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec3 aOffset;
+uniform mat4 uViewProjection;
+uniform float uScale;
+out vec3 vPosition;
+out vec3 vNormal;
+void main() {
+  vPosition = aPosition * uScale + aOffset;
+  vNormal = aNormal;
+  gl_Position = uViewProjection * vec4(vPosition, 1.0);
+}
+)";
+
+// Lambert from a key and a fill light plus Blinn-Phong on the key, over a sky/ground hemisphere
+// ambient. Lights are white so grey materials stay grey. Output is gamma encoded.
+const char* const kSurfaceFragmentShader = R"(#version 330 core
+in vec3 vPosition;
+in vec3 vNormal;
+uniform vec3 uColor;
+uniform vec3 uEye;
+uniform vec3 uKey;
+uniform vec3 uFill;
+uniform vec3 uUp;
+uniform float uSpecular;
+uniform int uFlat;
+out vec4 outColor;
+void main() {
+  if (uFlat == 1) {
+    outColor = vec4(pow(uColor, vec3(1.0 / 2.2)), 1.0);
+    return;
+  }
+  vec3 n = normalize(vNormal);
+  vec3 v = normalize(uEye - vPosition);
+  if (dot(n, v) < 0.0) n = -n;  // the inside of an open mesh
+  float key = max(dot(n, uKey), 0.0);
+  float fill = max(dot(n, uFill), 0.0);
+  float hemi = 0.5 + 0.5 * dot(n, uUp);
+  vec3 ambient = mix(vec3(0.08), vec3(0.22), hemi);
+  float specular = key > 0.0 ? pow(max(dot(n, normalize(uKey + v)), 0.0), 48.0) * uSpecular : 0.0;
+  vec3 color = uColor * (ambient + 0.80 * key + 0.28 * fill) + vec3(specular);
+  outColor = vec4(pow(clamp(color, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+const char* const kGroundVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+uniform mat4 uViewProjection;
+out vec3 vPosition;
+void main() {
+  vPosition = aPosition;
+  gl_Position = uViewProjection * vec4(aPosition, 1.0);
+}
+)";
+
+// A procedural grid (anti-aliased with fwidth), soft blob shadows under the bodies, and a fade to
+// the background towards the horizon.
+const char* const kGroundFragmentShader = R"(#version 330 core
+in vec3 vPosition;
+uniform vec3 uOrigin;
+uniform vec3 uAxisU;
+uniform vec3 uAxisV;
+uniform vec3 uNormal;
+uniform vec3 uEye;
+uniform vec3 uKey;
+uniform float uSpacing;
+uniform vec2 uFade;
+uniform vec3 uBackground;
+uniform int uShadowCount;
+uniform vec4 uShadows[16];
+out vec4 outColor;
+float gridLine(vec2 uv) {
+  vec2 d = abs(fract(uv - 0.5) - 0.5) / max(fwidth(uv), vec2(1e-6));
+  return 1.0 - min(min(d.x, d.y), 1.0);
+}
+void main() {
+  vec3 p = vPosition - uOrigin;
+  vec2 uv = vec2(dot(p, uAxisU), dot(p, uAxisV)) / uSpacing;
+  // Lines fade out where cells shrink to a few pixels, before they would alias into moiré.
+  float density = max(fwidth(uv).x, fwidth(uv).y);
+  float line = max(0.45 * gridLine(uv) * (1.0 - smoothstep(0.15, 0.4, density)),
+                   0.8 * gridLine(uv / 4.0) * (1.0 - smoothstep(0.6, 1.6, density)));
+  vec3 color = mix(vec3(0.50), vec3(0.30), line);
+  color *= 0.55 + 0.45 * max(dot(uNormal, uKey), 0.0);
+  float light = 1.0;
+  for (int i = 0; i < uShadowCount; ++i) {
+    vec3 d = vPosition - uShadows[i].xyz;
+    float r = uShadows[i].w;
+    float height = max(-dot(d, uNormal), 0.0);
+    vec3 lateral = d + height * uNormal;
+    float sigma = r * 0.9 + 0.5 * max(height - r, 0.0);
+    float strength = 0.6 * clamp(r / max(height, r), 0.0, 1.0);
+    light *= 1.0 - strength * exp(-dot(lateral, lateral) / (sigma * sigma));
+  }
+  color = pow(clamp(color * light, 0.0, 1.0), vec3(1.0 / 2.2));
+  float fade = smoothstep(uFade.x, uFade.y, length(vPosition - uEye));
+  outColor = vec4(mix(color, uBackground, fade), 1.0);
+}
+)";
+
+}  // namespace softbake
