@@ -82,8 +82,8 @@ struct CollisionSettings {
   Scalar restitution = 0.2f;  ///< between soft bodies; static colliders carry their own
   Scalar friction = 0.3f;
   /// Reuse the broad phase's pairs while every triangle stays within a margin of where it was
-  /// (core/collision/pair_cache.hpp): identical results, the broad phase once every few dozen steps. Off
-  /// runs the broad phase every step, to compare broad phases themselves.
+  /// (core/collision/pair_cache.hpp): identical results, the broad phase once every few dozen
+  /// steps. Off runs the broad phase every step, to compare broad phases themselves.
   bool pairCache = true;
 };
 
