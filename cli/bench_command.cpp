@@ -85,6 +85,7 @@ class ScratchFolder {
 struct StepRecord {
   std::vector<StageTimes> times;
   std::vector<std::uint32_t> pairs, contacts;
+  std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
   double simulationSeconds = 0;
 };
 
@@ -121,6 +122,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, std::size_t steps,
     record.times[s] = simulator.lastStepTimes();
     record.pairs[s] = std::uint32_t(simulator.lastStepCandidatePairs());
     record.contacts[s] = std::uint32_t(simulator.contacts().size());
+    if (const auto solve = simulator.lastSolve()) record.solverIterations += solve->iterations;
     if (!exports.empty() && (s + 1) % std::size_t(substeps) == 0) {
       frame.number = frameNumber;
       frame.time = (frameNumber - 1) / fps;
@@ -242,11 +244,12 @@ int bench(const BenchOptions& options) {
     const std::size_t steps = std::size_t(requested);
     std::printf(
         "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
-        "%s broad phase%s, %d threads%s\n",
+        "%s broad phase%s, %d threads%s, %s integrator\n",
         scene.setup.name.c_str(), faces, topology.bodies.size(), topology.particleCount(), steps,
         simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(),
         settings.collisions.pairCache ? " with the pair cache" : " every step", threads,
-        options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "");
+        options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "",
+        std::string(integratorName(settings.integrator)).c_str());
     std::fflush(stdout);
 
     std::vector<ExportTiming> exports;
@@ -262,10 +265,12 @@ int bench(const BenchOptions& options) {
         "scene=%s faces=%zu broadphase=%s pair_cache=%d threads=%d warmup=%ld steps=%zu "
         "steps_per_s=%.1f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
-        "bytes_per_face=%.0f\n",
+        "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond, step.median, step.p95, contactsPerStep,
-        peak, peak * 1048576.0 / double(faces));
+        peak, peak * 1048576.0 / double(faces),
+        std::string(integratorName(settings.integrator)).c_str(),
+        double(record.solverIterations) / double(steps));
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record, substeps);
   }

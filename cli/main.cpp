@@ -46,6 +46,11 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("--frames", run.frames, "number of frames to write")
       ->check(CLI::Range(1, 10000000));
   runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
+  runApp
+      ->add_option("--integrator", run.integrator,
+                   "explicit (the paper's Euler, the default) or implicit (backward Euler, stable "
+                   "at any step)")
+      ->check(CLI::IsMember(softbake::integratorNames()));
   runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);
   runApp->add_option("--frame-padding", run.framePadding, "digits of the frame number in names")
@@ -132,6 +137,10 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
   benchApp->add_option("--steps", bench.steps, "simulate exactly this many substeps")
       ->check(CLI::Range(1L, 1000000000L))
       ->excludes(benchFrames);
+  benchApp
+      ->add_option("--integrator", bench.integrator,
+                   "explicit (the paper's Euler) or implicit (backward Euler)")
+      ->check(CLI::IsMember(softbake::integratorNames()));
   benchApp->add_option("--substeps", bench.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);
   benchApp

@@ -81,7 +81,12 @@ VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology) 
 
 void describeSubsteps(const SubstepChoice& choice) {
   const double boundMs = choice.boundTimeStep * 1e3, stepMs = choice.timeStep * 1e3;
-  if (!std::isfinite(choice.boundTimeStep)) {
+  if (choice.implicit) {
+    std::printf(
+        "substeps: %d per frame (%s: implicit integrator, time step %.4g ms)\n", choice.substeps,
+        choice.automatic ? "auto, re-chosen every frame from the fastest particle" : "as given",
+        stepMs);
+  } else if (!std::isfinite(choice.boundTimeStep)) {
     std::printf("substeps: %d per frame (no springs: no stability bound)\n", choice.substeps);
   } else if (choice.automatic) {
     std::printf("substeps: %d per frame (auto: time step %.4g ms, stability bound %.4g ms)\n",

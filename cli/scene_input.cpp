@@ -31,6 +31,9 @@ void applySimulationOverrides(const SimulationOverrides& overrides, SimulationSe
   if (overrides.fps) settings.fps = *overrides.fps;
   if (overrides.substeps)
     settings.substeps = *overrides.substeps == "auto" ? 0 : std::stoi(*overrides.substeps);
+  if (overrides.integrator && !parseIntegrator(*overrides.integrator, settings.integrator))
+    throw Error(cat("--integrator: expected ", alternatives(integratorNames()), ", got '",
+                    *overrides.integrator, "'"));
   CollisionSettings& collisions = settings.collisions;
   if (overrides.broadPhase && !parseBroadPhase(*overrides.broadPhase, collisions.broadPhase))
     throw Error(cat("--broadphase: expected ", alternatives(broadPhaseNames()), ", got '",

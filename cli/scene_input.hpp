@@ -19,6 +19,7 @@ SceneFile loadSceneInput(const std::string& input);
 struct SimulationOverrides {
   std::optional<int> frames;
   std::optional<double> fps;
+  std::optional<std::string> integrator;  ///< "explicit", "implicit"
   std::optional<std::string> substeps;    ///< "auto" or a count
   std::optional<std::string> broadPhase;  ///< "sbhash", "spatialhash", "bvh", "brute"
   std::optional<std::string> response;    ///< "two-sided", "paper", "none"

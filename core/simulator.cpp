@@ -27,6 +27,17 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     collides_ = collides_ || surface.selfCollision;
   }
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
+  if (topology_->settings.integrator == IntegratorKind::Implicit) {
+    implicit_.emplace(*topology_);
+    shortestEdge_ = shortestEdge(*topology_);
+    substeps_.implicit = true;
+    if (substeps_.automatic) chooseImplicitSubsteps();
+  }
+}
+
+void Simulator::chooseImplicitSubsteps() {
+  substeps_.substeps = contactAccuracySubsteps(*topology_, state_.velocity, shortestEdge_);
+  substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;
 }
 
 Simulator::Simulator(std::shared_ptr<const SceneTopology> topology)
@@ -42,8 +53,10 @@ void Simulator::step(int frame) {
   computeVolumes(topology, state_, forces_);
   computePressureForces(topology, state_, forces_);
   clock.lap(Stage::Forces);
-  if (!integrate(topology, forces_, Scalar(substeps_.timeStep), state_, substepStart_))
-    reportBlowUp(frame);
+  const Scalar dt = Scalar(substeps_.timeStep);
+  const bool finite = implicit_ ? implicit_->step(topology, forces_, dt, state_, substepStart_)
+                                : integrate(topology, forces_, dt, state_, substepStart_);
+  if (!finite) reportBlowUp(frame);
   clock.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
@@ -64,6 +77,7 @@ void Simulator::step(int frame) {
 
 void Simulator::advanceToFrame(int frame) {
   stats_ = {};
+  if (implicit_ && substeps_.automatic) chooseImplicitSubsteps();
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
 }
 
@@ -72,11 +86,13 @@ void Simulator::reportBlowUp(int frame) const {
   const Index particle = findRunawayParticle(topology, state_);
   const Body& body = topology.bodies[particle == kNoParticle ? 0 : topology.particleBody[particle]];
   const Vec3& v = state_.velocity[particle == kNoParticle ? 0 : particle];
-  throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
-                  particle - body.firstParticle, " reached speed ",
-                  v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
-                  topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
-                  ", stable from ", substeps_.minimumStableSubsteps, ") or a lower stiffness"));
+  throw Error(
+      cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
+          particle - body.firstParticle, " reached speed ",
+          v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
+          topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
+          implicit_ ? std::string() : cat(", stable from ", substeps_.minimumStableSubsteps),
+          ") or a lower stiffness"));
 }
 
 }  // namespace softbake

@@ -10,12 +10,14 @@
 /// once: nothing allocates after the first substeps.
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/collision/contact.hpp"
 #include "core/collision/detection.hpp"
 #include "core/collision/response.hpp"
 #include "core/dynamics/forces.hpp"
+#include "core/dynamics/implicit_euler.hpp"
 #include "core/dynamics/stability.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
@@ -46,6 +48,10 @@ class Simulator {
   SimulationState& state() { return state_; }
   /// The force stage's latest results (volumes and pressures per body among them).
   const ForceBuffers& forces() const { return forces_; }
+  /// The implicit integrator's latest solve; empty under the explicit one.
+  std::optional<ImplicitSolveStats> lastSolve() const {
+    return implicit_ ? std::optional(implicit_->lastSolve()) : std::nullopt;
+  }
   const SubstepChoice& substeps() const { return substeps_; }
   const StepStats& lastFrameStats() const { return stats_; }
   /// Broad-phase pairs of the latest substep.
@@ -63,16 +69,20 @@ class Simulator {
   /// (1-based, the frame being computed) goes into that message.
   void step(int frame);
 
-  /// All substeps from frame `frame − 1` to `frame`.
+  /// All substeps from frame `frame − 1` to `frame`. Under the implicit integrator with "auto"
+  /// substeps, their count is chosen again first, from the speeds at the start of the frame.
   void advanceToFrame(int frame);
 
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
+  void chooseImplicitSubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
   ForceBuffers forces_;
   std::vector<Vec3> substepStart_;  ///< every particle's position at the start of the substep
+  std::optional<ImplicitEuler> implicit_;  ///< set under the implicit integrator
+  double shortestEdge_ = 0;                ///< for the implicit integrator's "auto" substeps
   SubstepChoice substeps_;
   StepStats stats_;
   CollisionDetector detector_;

@@ -85,11 +85,15 @@ class SceneParser {
 
  private:
   void parseSettings(const JsonValue& value) {
-    const JsonObject object = value.object(
-        {"fps", "frames", "substeps", "gravity", "units", "max_speed", "skin", "collisions"});
+    const JsonObject object = value.object({"fps", "frames", "integrator", "substeps", "gravity",
+                                            "units", "max_speed", "skin", "collisions"});
     SimulationSettings& settings = scene_.setup.settings;
     if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
     if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
+    if (auto integrator = object.find("integrator")) {
+      if (!parseIntegrator(integrator->string(), settings.integrator))
+        integrator->fail(cat("expected ", alternatives(integratorNames(), "\"")));
+    }
     if (auto substeps = object.find("substeps")) {
       const nlohmann::json& raw = substeps->raw();
       const bool isAuto = raw.is_string() && raw.get<std::string>() == "auto";

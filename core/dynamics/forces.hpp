@@ -36,6 +36,22 @@ void computeVolumes(const SceneTopology& topology, const SimulationState& state,
 void computePressureForces(const SceneTopology& topology, const SimulationState& state,
                            ForceBuffers& forces);
 
+/// Every force on particle `i`: gravity, then its springs, then its triangles' pressure, summed in
+/// the fixed order of its incidence rows (so the sum is the same for any thread count).
+inline Vec3 particleForce(const SceneTopology& topology, const ForceBuffers& forces, Index i) {
+  Vec3 force = topology.mass[i] * topology.settings.gravity;
+  for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
+    const Index ref = topology.springRefs[r];
+    if (ref & 1)
+      force -= forces.springForce[ref >> 1];
+    else
+      force += forces.springForce[ref >> 1];
+  }
+  for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
+    force += forces.triangleForce[topology.triangleRefs[r]];
+  return force;
+}
+
 /// The smallest volume the pressure law is evaluated at, as a fraction of the rest volume: keeps
 /// P finite when a body is crushed flat or turned inside out for a moment.
 inline constexpr double kMinVolumeFraction = 1e-3;

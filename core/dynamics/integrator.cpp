@@ -11,26 +11,12 @@ namespace softbake {
 
 namespace {
 constexpr std::size_t kParticleGrain = 2048;
-
-bool isRunaway(const Vec3& v, Scalar maxSpeedSquared) {
-  const Scalar speedSquared = v.squaredNorm();
-  // Written so that NaN fails the comparison and counts as a runaway.
-  return !(speedSquared <= maxSpeedSquared);
-}
 }  // namespace
 
 bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                SimulationState& state, std::span<Vec3> substepStart) {
-  const Vec3 gravity = topology.settings.gravity;
   const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
-  const Index* springRowStart = topology.springRowStart.data();
-  const Index* springRefs = topology.springRefs.data();
-  const Index* triangleRowStart = topology.triangleRowStart.data();
-  const Index* triangleRefs = topology.triangleRefs.data();
-  const Vec3* springForce = forces.springForce.data();
-  const Vec3* triangleForce = forces.triangleForce.data();
   const Scalar* inverseMass = topology.inverseMass.data();
-  const Scalar* mass = topology.mass.data();
   Vec3* x = state.position.data();
   Vec3* previous = substepStart.data();
   Vec3* v = state.velocity.data();
@@ -45,16 +31,7 @@ bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar
                           v[i].setZero();
                           continue;
                         }
-                        Vec3 force = mass[i] * gravity;
-                        for (Index r = springRowStart[i]; r < springRowStart[i + 1]; ++r) {
-                          const Index ref = springRefs[r];
-                          if (ref & 1)
-                            force -= springForce[ref >> 1];
-                          else
-                            force += springForce[ref >> 1];
-                        }
-                        for (Index r = triangleRowStart[i]; r < triangleRowStart[i + 1]; ++r)
-                          force += triangleForce[triangleRefs[r]];
+                        const Vec3 force = particleForce(topology, forces, Index(i));
                         v[i] += (dt * inverseMass[i]) * force;
                         x[i] += dt * v[i];
                         chunkRunaway |= isRunaway(v[i], maxSpeedSquared);
@@ -62,6 +39,25 @@ bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar
                       if (chunkRunaway) runaway.store(true, std::memory_order_relaxed);
                     });
   return !runaway.load();
+}
+
+std::string_view integratorName(IntegratorKind kind) {
+  return kind == IntegratorKind::Implicit ? "implicit" : "explicit";
+}
+
+std::vector<std::string> integratorNames() {
+  std::vector<std::string> names;
+  for (IntegratorKind kind : kIntegratorKinds) names.emplace_back(integratorName(kind));
+  return names;
+}
+
+bool parseIntegrator(std::string_view name, IntegratorKind& kind) {
+  for (IntegratorKind candidate : kIntegratorKinds)
+    if (name == integratorName(candidate)) {
+      kind = candidate;
+      return true;
+    }
+  return false;
 }
 
 Index findRunawayParticle(const SceneTopology& topology, const SimulationState& state) {

@@ -17,6 +17,12 @@ namespace softbake {
 bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                SimulationState& state, std::span<Vec3> substepStart);
 
+/// Whether a velocity counts as a blow-up: not finite, or faster than the limit.
+inline bool isRunaway(const Vec3& v, Scalar maxSpeedSquared) {
+  // Written so that NaN fails the comparison and counts as a runaway.
+  return !(v.squaredNorm() <= maxSpeedSquared);
+}
+
 /// The first particle whose velocity integrate() would reject, or kNoParticle.
 Index findRunawayParticle(const SceneTopology& topology, const SimulationState& state);
 

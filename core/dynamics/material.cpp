@@ -15,7 +15,9 @@ constexpr std::array kPresets = {
 };
 }  // namespace
 
-std::span<const NamedMaterial> materialPresets() { return kPresets; }
+std::span<const NamedMaterial> materialPresets() {
+  return kPresets;
+}
 
 std::optional<Material> findMaterialPreset(std::string_view name) {
   for (const NamedMaterial& preset : kPresets)

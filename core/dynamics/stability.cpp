@@ -46,4 +46,26 @@ SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested) {
   return choice;
 }
 
+int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3> velocities,
+                            double shortestEdge) {
+  const double frameTime = 1.0 / topology.settings.fps;
+  double fastest = 0;
+  for (const Vec3& v : velocities) fastest = std::max(fastest, double(v.norm()));
+  fastest += double(topology.settings.gravity.norm()) * frameTime;
+  const double reach = 0.5 * (double(topology.settings.skin) + shortestEdge);
+  if (!(reach > 0) || !std::isfinite(fastest)) return kMaxImplicitSubsteps;
+  const double substeps = std::ceil(fastest * frameTime / reach);
+  return int(std::clamp(substeps, 1.0, double(kMaxImplicitSubsteps)));
+}
+
+double shortestEdge(const SceneTopology& topology) {
+  double shortest = std::numeric_limits<double>::infinity();
+  for (const Triangle& t : topology.triangles)
+    for (int k = 0; k < 3; ++k)
+      shortest = std::min(
+          shortest,
+          double((topology.restPosition[t[(k + 1) % 3]] - topology.restPosition[t[k]]).norm()));
+  return shortest;
+}
+
 }  // namespace softbake

@@ -7,6 +7,8 @@
 /// the particle's springs. Solving for h gives h < (√(γ² + 4ω²) − γ)/ω². Gas pressure and contacts
 /// add much softer modes and are left out; the safety factor covers them.
 
+#include <span>
+
 #include "core/scene/scene_topology.hpp"
 
 namespace softbake {
@@ -27,10 +29,26 @@ struct SubstepChoice {
   double timeStep = 0;            ///< seconds per substep
   double boundTimeStep = 0;       ///< the stability bound, seconds
   int minimumStableSubsteps = 1;  ///< fewest substeps that keep the time step under the bound
-  bool belowBound() const { return substeps < minimumStableSubsteps; }
+  /// The implicit integrator: stable at any step, so the bound does not apply, and "auto" is
+  /// chosen by contactAccuracySubsteps() every frame.
+  bool implicit = false;
+  bool belowBound() const { return !implicit && substeps < minimumStableSubsteps; }
 };
 
 /// `requested` 0 means automatic: enough substeps to stay under kStabilitySafety of the bound.
 SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested);
+
+/// The most substeps per frame "auto" gives the implicit integrator.
+inline constexpr int kMaxImplicitSubsteps = 64;
+
+/// "auto" substeps of the implicit integrator, which is stable at any step, so the count is set by
+/// contact accuracy: over one substep the fastest particle (its speed now plus what gravity adds
+/// over the frame) moves at most half of the skin plus the shortest rest edge, so the segment tests
+/// of §2.3 see each crossing from nearby. Re-chosen every frame; 1 to kMaxImplicitSubsteps.
+int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3> velocities,
+                            double shortestEdge);
+
+/// The shortest rest length of any structural spring, scene units; infinity when there is none.
+double shortestEdge(const SceneTopology& topology);
 
 }  // namespace softbake

@@ -73,6 +73,23 @@ std::vector<std::string> responseModeNames();
 /// The mode a name gives, or false for an unknown name.
 bool parseResponseMode(std::string_view name, ResponseMode& mode);
 
+/// How a substep advances velocities and positions (core/dynamics/).
+enum class IntegratorKind {
+  Explicit,  ///< the paper's explicit (symplectic) Euler, §1.2: stable below a time-step bound
+  Implicit,  ///< backward Euler, linearised once (Baraff & Witkin 1998): stable at any step
+};
+
+/// Every kind, in the order the command line and the scene format list them.
+inline constexpr IntegratorKind kIntegratorKinds[] = {IntegratorKind::Explicit,
+                                                      IntegratorKind::Implicit};
+
+/// "explicit", "implicit".
+std::string_view integratorName(IntegratorKind kind);
+/// The names of kIntegratorKinds, in order.
+std::vector<std::string> integratorNames();
+/// The kind a name gives, or false for an unknown name.
+bool parseIntegrator(std::string_view name, IntegratorKind& kind);
+
 struct CollisionSettings {
   /// The fastest correct broad phase, measured (bench/results/README.md): the AABB tree. The
   /// paper's subdivided boxes and box hash remain one key away ("sbhash"), with identical results.
@@ -90,7 +107,10 @@ struct CollisionSettings {
 struct SimulationSettings {
   double fps = 24;
   int frames = 240;
-  /// Substeps per frame; 0 chooses them from the explicit-Euler stability bound.
+  /// The paper's explicit Euler, as the figures were made; "implicit" is stable at any step.
+  IntegratorKind integrator = IntegratorKind::Explicit;
+  /// Substeps per frame; 0 chooses them: from the explicit-Euler stability bound, or for the
+  /// implicit integrator from contact accuracy (core/dynamics/stability.hpp).
   int substeps = 0;
   Vec3 gravity = Vec3(0, Scalar(-9.81), 0);  ///< m/s²
   /// Speed above which a particle is taken to have blown up, in scene units per second.

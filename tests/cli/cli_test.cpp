@@ -281,6 +281,34 @@ TEST_F(CliTest, NoResponseLetsTheBallFallThroughTheGround) {
   EXPECT_LT(highest, 0) << "with --no-response the whole ball passes the ground plane";
 }
 
+TEST_F(CliTest, ImplicitIntegratorRunsTheDefaultSceneInFewSubsteps) {
+  const fs::path out = folder_ / "out";
+  const Result run =
+      runSoftbake("run --integrator implicit --frames 24 --no-render -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("implicit integrator"), std::string::npos) << run.output;
+  EXPECT_TRUE(fs::exists(out / "obj/default_0024.obj"));
+  const Result bad = runSoftbake("run --integrator verlet -o " + quoted(out.string()));
+  EXPECT_NE(bad.exitCode, 0);
+  EXPECT_NE(bad.output.find("verlet"), std::string::npos) << bad.output;
+}
+
+TEST_F(CliTest, SceneKeyIntegratorIsReadAndCheckedWithItsPath) {
+  const fs::path scene = writeScene("implicit.json", R"({"settings": {"integrator": "implicit",
+    "frames": 3}, "bodies": [{"name": "ball", "mesh": {"primitive": "icosphere"}}]})");
+  const Result run = runSoftbake("run " + quoted(scene.string()) + " --no-render -o " +
+                                 quoted((folder_ / "o").string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("implicit integrator"), std::string::npos) << run.output;
+  const fs::path badScene = writeScene("rk4.json", R"({"settings": {"integrator": "rk4"},
+    "bodies": [{"name": "ball", "mesh": {"primitive": "icosphere"}}]})");
+  const Result bad = runSoftbake("run " + quoted(badScene.string()) + " --no-render -o " +
+                                 quoted((folder_ / "o2").string()));
+  EXPECT_EQ(bad.exitCode, 1);
+  EXPECT_NE(bad.output.find("settings.integrator"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("\"implicit\""), std::string::npos) << bad.output;
+}
+
 TEST_F(CliTest, UnknownBroadPhaseIsRefused) {
   const Result run = runSoftbake("run --broadphase octree -o " + quoted((folder_ / "o").string()));
   EXPECT_NE(run.exitCode, 0);
