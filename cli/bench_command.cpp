@@ -263,11 +263,12 @@ int bench(const BenchOptions& options) {
     const double peak = peakResidentMiB();
     std::printf(
         "scene=%s faces=%zu broadphase=%s pair_cache=%d threads=%d warmup=%ld steps=%zu "
-        "steps_per_s=%.1f "
+        "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
-        threads, options.warmupSteps, steps, stepsPerSecond, step.median, step.p95, contactsPerStep,
+        threads, options.warmupSteps, steps, stepsPerSecond, stepsPerSecond / substeps, step.median,
+        step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
         double(record.solverIterations) / double(steps));

@@ -233,10 +233,11 @@ int run(const RunOptions& options) {
 
   writeManifest(options.out, manifest);
 
-  const double steps = double(frames - 1) * simulator.substeps().substeps;
-  std::printf("wrote %d frames (%s) to %s in %.2f s: %.0f steps, %.0f steps/s\n", frames,
-              formatBytes(pipeline.bytesWritten()).c_str(), options.out.string().c_str(), seconds,
-              steps, seconds > 0 ? steps / seconds : 0.0);
+  const double steps = double(simulator.stepsTaken());
+  std::printf("wrote %d frames (%s) to %s in %.2f s: %.1f frames/s, %.0f steps, %.0f steps/s\n",
+              frames, formatBytes(pipeline.bytesWritten()).c_str(), options.out.string().c_str(),
+              seconds, seconds > 0 ? frames / seconds : 0.0, steps,
+              seconds > 0 ? steps / seconds : 0.0);
   if (simulator.collides())
     std::printf(
         "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "

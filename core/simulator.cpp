@@ -49,6 +49,7 @@ Simulator::Simulator(SceneTopology topology)
 void Simulator::step(int frame) {
   const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
+  ++stepsTaken_;
   computeSpringForces(topology, state_, forces_);
   computeVolumes(topology, state_, forces_);
   computePressureForces(topology, state_, forces_);

@@ -9,6 +9,7 @@
 /// of §2.3 need. Each stage's scratch (forces, boxes, pairs, contacts) is owned here and sized
 /// once: nothing allocates after the first substeps.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -52,7 +53,10 @@ class Simulator {
   std::optional<ImplicitSolveStats> lastSolve() const {
     return implicit_ ? std::optional(implicit_->lastSolve()) : std::nullopt;
   }
+  /// The substeps of the latest frame (the implicit integrator's "auto" re-chooses them per frame).
   const SubstepChoice& substeps() const { return substeps_; }
+  /// Substeps run since the start.
+  std::uint64_t stepsTaken() const { return stepsTaken_; }
   const StepStats& lastFrameStats() const { return stats_; }
   /// Broad-phase pairs of the latest substep.
   std::size_t lastStepCandidatePairs() const { return detector_.candidatePairs().size(); }
@@ -88,6 +92,7 @@ class Simulator {
   CollisionDetector detector_;
   std::vector<Contact> contacts_;
   bool collides_ = false;
+  std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;
   StageTimes stepTimes_;
 };

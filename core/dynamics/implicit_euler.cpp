@@ -136,19 +136,25 @@ double ImplicitEuler::dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b
 }
 
 void ImplicitEuler::solve(const SceneTopology& topology) {
-  // Preconditioned CG from Δv = 0 (Shewchuk 1994, B3); the residual starts as b.
+  // Preconditioned CG (Shewchuk 1994, B3), warm-started from the previous step's Δv: successive
+  // steps change velocity alike, so the first residual is already small. Pinned entries stay 0.
   const std::size_t n = topology.particleCount();
+  multiply(topology, deltaV_, product_);
   forEachParticle(n, [&](Index i) {
-    deltaV_[i].setZero();
-    residual_[i] = rhs_[i];
+    residual_[i] = rhs_[i] - product_[i];
     preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
     direction_[i] = preconditioned_[i];
   });
   const double rhsNorm = std::sqrt(dot(rhs_, rhs_));
   double rz = dot(residual_, preconditioned_);
   stats_ = {};
-  if (rhsNorm == 0) return;
+  if (rhsNorm == 0) {
+    forEachParticle(n, [&](Index i) { deltaV_[i].setZero(); });
+    return;
+  }
   const double tolerance = kTolerance * rhsNorm;
+  stats_.relativeResidual = std::sqrt(dot(residual_, residual_)) / rhsNorm;
+  if (stats_.relativeResidual <= kTolerance) return;
   for (int iteration = 1; iteration <= kMaxIterations; ++iteration) {
     multiply(topology, direction_, product_);
     const double curvature = dot(direction_, product_);
