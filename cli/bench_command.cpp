@@ -268,8 +268,7 @@ int bench(const BenchOptions& options) {
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond, stepsPerSecond / substeps, step.median,
-        step.p95, contactsPerStep,
-        peak, peak * 1048576.0 / double(faces),
+        step.p95, contactsPerStep, peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
         double(record.solverIterations) / double(steps));
     std::fflush(stdout);
