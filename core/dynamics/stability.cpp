@@ -52,7 +52,7 @@ int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3>
   double fastest = 0;
   for (const Vec3& v : velocities) fastest = std::max(fastest, double(v.norm()));
   fastest += double(topology.settings.gravity.norm()) * frameTime;
-  const double reach = 0.5 * (double(topology.settings.skin) + shortestEdge);
+  const double reach = kContactReachFraction * (double(topology.settings.skin) + shortestEdge);
   if (!(reach > 0) || !std::isfinite(fastest)) return kMaxImplicitSubsteps;
   const double substeps = std::ceil(fastest * frameTime / reach);
   return int(std::clamp(substeps, 1.0, double(kMaxImplicitSubsteps)));

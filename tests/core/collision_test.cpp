@@ -296,16 +296,28 @@ std::pair<std::size_t, std::size_t> worstInterpenetration(SceneSetup scene, int 
   return {worst, contacts};
 }
 
+/// `scene` under `integrator` with "auto" substeps.
+SceneSetup integratedBy(SceneSetup scene, IntegratorKind integrator) {
+  scene.settings.integrator = integrator;
+  return scene;
+}
+
 TEST(CollisionScenes, ThrownBallsMeetAndDoNotInterpenetrate) {
-  const auto [worst, contacts] = worstInterpenetration(twoBallsThrownAtEachOther(), 48);
-  EXPECT_GT(contacts, 0u) << "the balls must meet within two seconds";
-  EXPECT_LE(worst, kInterpenetrationBound);
+  for (IntegratorKind integrator : kIntegratorKinds) {
+    const auto [worst, contacts] =
+        worstInterpenetration(integratedBy(twoBallsThrownAtEachOther(), integrator), 48);
+    EXPECT_GT(contacts, 0u) << "the balls must meet within two seconds";
+    EXPECT_LE(worst, kInterpenetrationBound) << integratorName(integrator);
+  }
 }
 
 TEST(CollisionScenes, BallsFallingOnAStaticSphereDoNotInterpenetrateIt) {
-  const auto [worst, contacts] = worstInterpenetration(ballsOnStaticSphere(), 72);
-  EXPECT_GT(contacts, 0u);
-  EXPECT_LE(worst, kInterpenetrationBound);
+  for (IntegratorKind integrator : kIntegratorKinds) {
+    const auto [worst, contacts] =
+        worstInterpenetration(integratedBy(ballsOnStaticSphere(), integrator), 72);
+    EXPECT_GT(contacts, 0u);
+    EXPECT_LE(worst, kInterpenetrationBound) << integratorName(integrator);
+  }
 }
 
 TEST(CollisionScenes, WithoutResponseTheBallsPassIntoTheSphere) {

@@ -123,7 +123,9 @@ TEST(ImplicitEuler, OneAndTwoThreadsGiveTheSameBytes) {
   std::vector<std::vector<Vec3>> runs;
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-    SceneSetup scene = implicitBall("jelly");
+    // Rubber on rubber: a jelly ball landing on another one still runs away under this
+    // integrator (bench/results/integrators.md), which is not what this test is about.
+    SceneSetup scene = implicitBall("rubber");
     BodySetup second = scene.bodies[0];
     second.name = "second";
     second.mesh = makeIcosphere(3, 0.4f, Vec3f(0.3f, 2.2f, 0));
