@@ -3,8 +3,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/error.hpp"
 #include "core/dynamics/material.hpp"
+#include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/mesh_transform.hpp"

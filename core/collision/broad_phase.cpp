@@ -10,6 +10,7 @@
 #include "core/collision/bvh_broad_phase.hpp"
 #include "core/collision/sbhash_broad_phase.hpp"
 #include "core/collision/spatial_hash_broad_phase.hpp"
+#include "core/enum_names.hpp"
 
 namespace softbake {
 
@@ -40,19 +41,11 @@ std::string_view broadPhaseName(BroadPhaseKind kind) {
 }
 
 std::vector<std::string> broadPhaseNames() {
-  std::vector<std::string> names;
-  for (BroadPhaseKind kind : kBroadPhaseKinds) names.emplace_back(broadPhaseName(kind));
-  return names;
+  return namesOf(std::span<const BroadPhaseKind>(kBroadPhaseKinds), broadPhaseName);
 }
 
 bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind) {
-  for (BroadPhaseKind candidate : kBroadPhaseKinds) {
-    if (broadPhaseName(candidate) == name) {
-      kind = candidate;
-      return true;
-    }
-  }
-  return false;
+  return parseNamed(name, std::span<const BroadPhaseKind>(kBroadPhaseKinds), broadPhaseName, kind);
 }
 
 namespace broad_phase_detail {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 
+#include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -129,18 +130,11 @@ std::string_view responseModeName(ResponseMode mode) {
 }
 
 std::vector<std::string> responseModeNames() {
-  std::vector<std::string> names;
-  for (ResponseMode mode : kResponseModes) names.emplace_back(responseModeName(mode));
-  return names;
+  return namesOf(std::span<const ResponseMode>(kResponseModes), responseModeName);
 }
 
 bool parseResponseMode(std::string_view name, ResponseMode& mode) {
-  for (ResponseMode candidate : kResponseModes)
-    if (name == responseModeName(candidate)) {
-      mode = candidate;
-      return true;
-    }
-  return false;
+  return parseNamed(name, std::span<const ResponseMode>(kResponseModes), responseModeName, mode);
 }
 
 namespace {

@@ -5,6 +5,7 @@
 
 #include <atomic>
 
+#include "core/enum_names.hpp"
 #include "core/mesh/weld.hpp"
 
 namespace softbake {
@@ -46,18 +47,11 @@ std::string_view integratorName(IntegratorKind kind) {
 }
 
 std::vector<std::string> integratorNames() {
-  std::vector<std::string> names;
-  for (IntegratorKind kind : kIntegratorKinds) names.emplace_back(integratorName(kind));
-  return names;
+  return namesOf(std::span<const IntegratorKind>(kIntegratorKinds), integratorName);
 }
 
 bool parseIntegrator(std::string_view name, IntegratorKind& kind) {
-  for (IntegratorKind candidate : kIntegratorKinds)
-    if (name == integratorName(candidate)) {
-      kind = candidate;
-      return true;
-    }
-  return false;
+  return parseNamed(name, std::span<const IntegratorKind>(kIntegratorKinds), integratorName, kind);
 }
 
 Index findRunawayParticle(const SceneTopology& topology, const SimulationState& state) {

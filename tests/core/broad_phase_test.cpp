@@ -18,10 +18,10 @@
 #include <random>
 #include <string>
 
-#include "core/collision/sbhash_broad_phase.hpp"
 #include "core/collision/bvh_broad_phase.hpp"
-#include "core/mesh/icosphere.hpp"
+#include "core/collision/sbhash_broad_phase.hpp"
 #include "core/collision/spatial_hash_broad_phase.hpp"
+#include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "tests/core/allocation_counter.hpp"
 

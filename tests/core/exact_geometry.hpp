@@ -1,7 +1,7 @@
 #pragma once
 /// Double-precision references for the narrow-phase tests, written independently of
-/// core/collision/line_triangle and core/collision/triangle_pair_intersection so that the two can be checked against each
-/// other:
+/// core/collision/line_triangle and core/collision/triangle_pair_intersection so that the two can
+/// be checked against each other:
 /// - mollerTrumbore: segment–triangle intersection (Möller & Trumbore 1997, "Fast, minimum storage
 ///   ray/triangle intersection"), closed segment and closed triangle.
 /// - trianglesIntersect: triangle–triangle intersection by interval overlap on the line where the

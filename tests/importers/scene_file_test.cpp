@@ -8,8 +8,8 @@
 
 #include "core/error.hpp"
 #include "core/mesh/mesh_topology.hpp"
-#include "core/text.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/text.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
