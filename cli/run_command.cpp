@@ -79,13 +79,15 @@ VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology) 
   return vdb;
 }
 
-void describeSubsteps(const SubstepChoice& choice) {
+void describeSubsteps(const SubstepChoice& choice, IntegratorKind integrator) {
   const double boundMs = choice.boundTimeStep * 1e3, stepMs = choice.timeStep * 1e3;
-  if (choice.implicit) {
+  if (choice.stableAtAnyStep) {
     std::printf(
-        "substeps: %d per frame (%s: implicit integrator, time step %.4g ms)\n", choice.substeps,
+        "substeps: %d per frame (%s: %s integrator, stable at any step; time step %.4g "
+        "ms)\n",
+        choice.substeps,
         choice.automatic ? "auto, re-chosen every frame from the fastest particle" : "as given",
-        stepMs);
+        std::string(integratorName(integrator)).c_str(), stepMs);
   } else if (!std::isfinite(choice.boundTimeStep)) {
     std::printf("substeps: %d per frame (no springs: no stability bound)\n", choice.substeps);
   } else if (choice.automatic) {
@@ -125,7 +127,7 @@ void describeRun(const std::string& name, const Simulator& simulator) {
       "scene '%s': %zu bodies, %zu particles, %zu triangles, %zu springs; %d frames at %g fps\n",
       name.c_str(), topology.bodies.size(), topology.particleCount(), triangles,
       topology.springs.size(), topology.settings.frames, topology.settings.fps);
-  describeSubsteps(simulator.substeps());
+  describeSubsteps(simulator.substeps(), simulator.topology().settings.integrator);
   const CollisionSettings& collisions = topology.settings.collisions;
   if (simulator.collides())
     std::printf("collisions: %s broad phase%s, %s response\n",

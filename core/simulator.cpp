@@ -27,16 +27,20 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     collides_ = collides_ || surface.selfCollision;
   }
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
-  if (topology_->settings.integrator == IntegratorKind::Implicit) {
-    implicit_.emplace(*topology_);
+  const IntegratorKind integrator = topology_->settings.integrator;
+  if (integrator == IntegratorKind::Implicit) implicit_.emplace(*topology_);
+  if (integrator == IntegratorKind::Xpbd) xpbd_.emplace(*topology_);
+  if (integrator != IntegratorKind::Explicit) {
     shortestEdge_ = shortestEdge(*topology_);
-    substeps_.implicit = true;
-    if (substeps_.automatic) chooseImplicitSubsteps();
+    substeps_.stableAtAnyStep = true;
+    if (substeps_.automatic) chooseContactAccuracySubsteps();
   }
 }
 
-void Simulator::chooseImplicitSubsteps() {
+void Simulator::chooseContactAccuracySubsteps() {
   substeps_.substeps = contactAccuracySubsteps(*topology_, state_.velocity, shortestEdge_);
+  // XPBD's springs soften at steps past the explicit bound (core/dynamics/xpbd.hpp).
+  if (xpbd_) substeps_.substeps = std::max(substeps_.substeps, substeps_.minimumStableSubsteps);
   substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;
 }
 
@@ -50,12 +54,16 @@ void Simulator::step(int frame) {
   const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
   ++stepsTaken_;
-  computeSpringForces(topology, state_, forces_);
-  computeVolumes(topology, state_, forces_);
-  computePressureForces(topology, state_, forces_);
-  clock.lap(Stage::Forces);
+  // XPBD solves springs and gas within its step, from positions it moves as it goes.
+  if (!xpbd_) {
+    computeSpringForces(topology, state_, forces_);
+    computeVolumes(topology, state_, forces_);
+    computePressureForces(topology, state_, forces_);
+    clock.lap(Stage::Forces);
+  }
   const Scalar dt = Scalar(substeps_.timeStep);
   const bool finite = implicit_ ? implicit_->step(topology, forces_, dt, state_, substepStart_)
+                      : xpbd_   ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
                                 : integrate(topology, forces_, dt, state_, substepStart_);
   if (!finite) reportBlowUp(frame);
   clock.lap(Stage::Integration);
@@ -78,7 +86,7 @@ void Simulator::step(int frame) {
 
 void Simulator::advanceToFrame(int frame) {
   stats_ = {};
-  if (implicit_ && substeps_.automatic) chooseImplicitSubsteps();
+  if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
 }
 
@@ -87,13 +95,14 @@ void Simulator::reportBlowUp(int frame) const {
   const Index particle = findRunawayParticle(topology, state_);
   const Body& body = topology.bodies[particle == kNoParticle ? 0 : topology.particleBody[particle]];
   const Vec3& v = state_.velocity[particle == kNoParticle ? 0 : particle];
-  throw Error(
-      cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
-          particle - body.firstParticle, " reached speed ",
-          v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
-          topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
-          implicit_ ? std::string() : cat(", stable from ", substeps_.minimumStableSubsteps),
-          ") or a lower stiffness"));
+  throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
+                  particle - body.firstParticle, " reached speed ",
+                  v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
+                  topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
+                  substeps_.stableAtAnyStep
+                      ? std::string()
+                      : cat(", stable from ", substeps_.minimumStableSubsteps),
+                  ") or a lower stiffness"));
 }
 
 }  // namespace softbake

@@ -2,7 +2,10 @@
 /// Advances a SimulationState frame by frame over a shared, immutable SceneTopology: the fixed
 /// sequence of stages of one substep.
 ///
-///   forces (springs, volume, pressure) → integrate (paper §1.2) → collisions → planes
+///   forces (springs, volume, pressure) → integrate → collisions → planes
+///
+/// The integrator is the paper's explicit Euler (§1.2), backward Euler or XPBD
+/// (settings.integrator); the collision stages after it are the same for all three.
 ///
 /// The integrator keeps where each particle started the substep, and the collision stage sees
 /// each particle's segment from there to its new position, which is what the line–triangle tests
@@ -20,6 +23,7 @@
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/implicit_euler.hpp"
 #include "core/dynamics/stability.hpp"
+#include "core/dynamics/xpbd.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 #include "core/stage_timer.hpp"
@@ -53,7 +57,8 @@ class Simulator {
   std::optional<ImplicitSolveStats> lastSolve() const {
     return implicit_ ? std::optional(implicit_->lastSolve()) : std::nullopt;
   }
-  /// The substeps of the latest frame (the implicit integrator's "auto" re-chooses them per frame).
+  /// The substeps of the latest frame ("auto" under the implicit and XPBD integrators re-chooses
+  /// them per frame).
   const SubstepChoice& substeps() const { return substeps_; }
   /// Substeps run since the start.
   std::uint64_t stepsTaken() const { return stepsTaken_; }
@@ -79,14 +84,15 @@ class Simulator {
 
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
-  void chooseImplicitSubsteps();
+  void chooseContactAccuracySubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
   ForceBuffers forces_;
   std::vector<Vec3> substepStart_;  ///< every particle's position at the start of the substep
   std::optional<ImplicitEuler> implicit_;  ///< set under the implicit integrator
-  double shortestEdge_ = 0;                ///< for the implicit integrator's "auto" substeps
+  std::optional<Xpbd> xpbd_;               ///< set under the XPBD integrator
+  double shortestEdge_ = 0;  ///< for "auto" substeps of the integrators stable at any step
   SubstepChoice substeps_;
   StepStats stats_;
   CollisionDetector detector_;

@@ -52,6 +52,16 @@ inline Vec3 particleForce(const SceneTopology& topology, const ForceBuffers& for
   return force;
 }
 
+/// Gravity and gas pressure on particle `i`, without its springs: what the XPBD integrator applies
+/// as forces, its springs being constraints. Same fixed order as particleForce().
+inline Vec3 gravityAndPressureForce(const SceneTopology& topology, const ForceBuffers& forces,
+                                    Index i) {
+  Vec3 force = topology.mass[i] * topology.settings.gravity;
+  for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
+    force += forces.triangleForce[topology.triangleRefs[r]];
+  return force;
+}
+
 /// The smallest volume the pressure law is evaluated at, as a fraction of the rest volume: keeps
 /// P finite when a body is crushed flat or turned inside out for a moment.
 inline constexpr double kMinVolumeFraction = 1e-3;

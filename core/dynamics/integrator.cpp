@@ -43,7 +43,15 @@ bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar
 }
 
 std::string_view integratorName(IntegratorKind kind) {
-  return kind == IntegratorKind::Implicit ? "implicit" : "explicit";
+  switch (kind) {
+    case IntegratorKind::Implicit:
+      return "implicit";
+    case IntegratorKind::Xpbd:
+      return "xpbd";
+    case IntegratorKind::Explicit:
+      break;
+  }
+  return "explicit";
 }
 
 std::vector<std::string> integratorNames() {

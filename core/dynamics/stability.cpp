@@ -53,9 +53,9 @@ int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3>
   for (const Vec3& v : velocities) fastest = std::max(fastest, double(v.norm()));
   fastest += double(topology.settings.gravity.norm()) * frameTime;
   const double reach = kContactReachFraction * (double(topology.settings.skin) + shortestEdge);
-  if (!(reach > 0) || !std::isfinite(fastest)) return kMaxImplicitSubsteps;
+  if (!(reach > 0) || !std::isfinite(fastest)) return kMaxAutoSubsteps;
   const double substeps = std::ceil(fastest * frameTime / reach);
-  return int(std::clamp(substeps, 1.0, double(kMaxImplicitSubsteps)));
+  return int(std::clamp(substeps, 1.0, double(kMaxAutoSubsteps)));
 }
 
 double shortestEdge(const SceneTopology& topology) {

@@ -29,28 +29,30 @@ struct SubstepChoice {
   double timeStep = 0;            ///< seconds per substep
   double boundTimeStep = 0;       ///< the stability bound, seconds
   int minimumStableSubsteps = 1;  ///< fewest substeps that keep the time step under the bound
-  /// The implicit integrator: stable at any step, so the bound does not apply, and "auto" is
-  /// chosen by contactAccuracySubsteps() every frame.
-  bool implicit = false;
-  bool belowBound() const { return !implicit && substeps < minimumStableSubsteps; }
+  /// The implicit and XPBD integrators: stable at any step, so the bound does not apply, and
+  /// "auto" is chosen by contactAccuracySubsteps() every frame (for XPBD, never below
+  /// minimumStableSubsteps, which keeps its springs' stiffness).
+  bool stableAtAnyStep = false;
+  bool belowBound() const { return !stableAtAnyStep && substeps < minimumStableSubsteps; }
 };
 
 /// `requested` 0 means automatic: enough substeps to stay under kStabilitySafety of the bound.
 SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested);
 
-/// The most substeps per frame "auto" gives the implicit integrator.
-inline constexpr int kMaxImplicitSubsteps = 64;
+/// The most substeps per frame "auto" gives the integrators that are stable at any step.
+inline constexpr int kMaxAutoSubsteps = 64;
 
-/// The part of (skin + shortest edge) the fastest particle may cover in one implicit substep.
+/// The part of (skin + shortest edge) the fastest particle may cover in one substep of an
+/// integrator that is stable at any step.
 /// Measured: at a tenth, bodies thrown at each other and dropped on a static sphere stay free of
 /// intersecting triangles (tests/core/collision_test); at a half they did not.
 inline constexpr double kContactReachFraction = 0.1;
 
-/// "auto" substeps of the implicit integrator, which is stable at any step, so the count is set by
-/// contact accuracy: over one substep the fastest particle (its speed now plus what gravity adds
-/// over the frame) moves at most kContactReachFraction of the skin plus the shortest rest edge, so
-/// the segment tests of §2.3 see each crossing from nearby. Re-chosen every frame; 1 to
-/// kMaxImplicitSubsteps.
+/// "auto" substeps of the implicit and XPBD integrators, which are stable at any step, so the
+/// count is set by contact accuracy: over one substep the fastest particle (its speed now plus what
+/// gravity adds over the frame) moves at most kContactReachFraction of the skin plus the shortest
+/// rest edge, so the segment tests of §2.3 see each crossing from nearby. Re-chosen every frame; 1
+/// to kMaxAutoSubsteps.
 int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3> velocities,
                             double shortestEdge);
 

@@ -77,13 +77,14 @@ bool parseResponseMode(std::string_view name, ResponseMode& mode);
 enum class IntegratorKind {
   Explicit,  ///< the paper's explicit (symplectic) Euler, §1.2: stable below a time-step bound
   Implicit,  ///< backward Euler, linearised once (Baraff & Witkin 1998): stable at any step
+  Xpbd,      ///< XPBD with small steps (Macklin et al. 2016, 2019): stable at any step
 };
 
 /// Every kind, in the order the command line and the scene format list them.
-inline constexpr IntegratorKind kIntegratorKinds[] = {IntegratorKind::Explicit,
-                                                      IntegratorKind::Implicit};
+inline constexpr IntegratorKind kIntegratorKinds[] = {
+    IntegratorKind::Explicit, IntegratorKind::Implicit, IntegratorKind::Xpbd};
 
-/// "explicit", "implicit".
+/// "explicit", "implicit", "xpbd".
 std::string_view integratorName(IntegratorKind kind);
 /// The names of kIntegratorKinds, in order.
 std::vector<std::string> integratorNames();
