@@ -6,6 +6,7 @@
 #include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/run_command.hpp"
+#include "cli/scene_command.hpp"
 #include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 
@@ -48,8 +49,8 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
   runApp
       ->add_option("--integrator", run.integrator,
-                   "explicit (the paper's Euler, the default) or implicit (backward Euler, stable "
-                   "at any step)")
+                   "explicit (the paper's Euler, the default), implicit (backward Euler) or xpbd "
+                   "(position-based, small steps); the last two are stable at any step")
       ->check(CLI::IsMember(softbake::integratorNames()));
   runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);
@@ -139,7 +140,7 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ->excludes(benchFrames);
   benchApp
       ->add_option("--integrator", bench.integrator,
-                   "explicit (the paper's Euler) or implicit (backward Euler)")
+                   "explicit (the paper's Euler), implicit (backward Euler) or xpbd")
       ->check(CLI::IsMember(softbake::integratorNames()));
   benchApp->add_option("--substeps", bench.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);
@@ -184,6 +185,8 @@ int main(int argc, char** argv) {
   CLI::App* compareApp = addCompareCommand(app, compare);
   softbake::BenchOptions bench;
   CLI::App* benchApp = addBenchCommand(app, bench);
+  softbake::SceneCommandOptions scene;
+  CLI::App* sceneApp = softbake::addSceneCommand(app, scene);
 
   try {
     app.parse(argc, argv);
@@ -199,5 +202,6 @@ int main(int argc, char** argv) {
   }
   if (compareApp->parsed()) return softbake::compareCommand(compare);
   if (benchApp->parsed()) return softbake::benchCommand(bench);
+  if (sceneApp->parsed()) return softbake::sceneCommand(scene);
   return 0;
 }

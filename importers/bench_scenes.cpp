@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "importers/json_reader.hpp"
+
 namespace softbake {
 
 namespace {
@@ -53,12 +55,17 @@ nlohmann::json ballsSceneJson(std::string_view name, int balls, int subdivisions
           {"colliders", {{{"type", "plane"}, {"name", "ground"}}}}};
 }
 
+std::optional<nlohmann::json> benchSceneJson(std::string_view name) {
+  if (name == "default") return parseJsonText(defaultSceneJson(), "built-in default scene");
+  for (const BallsScene& scene : kBallsScenes)
+    if (name == scene.name) return ballsSceneJson(scene.name, scene.balls, scene.subdivisions);
+  return std::nullopt;
+}
+
 std::optional<SceneFile> benchScene(std::string_view name) {
   if (name == "default") return defaultScene();
-  for (const BallsScene& scene : kBallsScenes)
-    if (name == scene.name)
-      return parseScene(ballsSceneJson(scene.name, scene.balls, scene.subdivisions),
-                        std::string(scene.name), ".");
+  if (std::optional<nlohmann::json> json = benchSceneJson(name))
+    return parseScene(*json, std::string(name), ".");
   return std::nullopt;
 }
 

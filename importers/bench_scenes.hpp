@@ -29,6 +29,10 @@ std::vector<std::string> benchSceneNames();
 /// The scene of a built-in name, or nothing when `name` is not one.
 std::optional<SceneFile> benchScene(std::string_view name);
 
+/// The JSON a built-in scene is built from (`softbake scene NAME` prints it), or nothing when
+/// `name` is not one.
+std::optional<nlohmann::json> benchSceneJson(std::string_view name);
+
 /// The JSON of a balls scene of `balls` icosphere balls subdivided `subdivisions` times.
 nlohmann::json ballsSceneJson(std::string_view name, int balls, int subdivisions);
 

@@ -1,0 +1,26 @@
+#pragma once
+/// `softbake scene NAME_OR_FILE`: prints a scene's JSON on stdout, so other tools (the Blender
+/// peer benchmark, bench/blender_peer.sh) can rebuild exactly the scene softbake simulates. A
+/// built-in name (default, balls1k, balls10k, balls100k, balls1m) prints the JSON the scene is
+/// built from; a .json file prints its JSON as parsed (comments dropped), after checking that it
+/// loads. Mesh files have no scene JSON and are refused.
+
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace softbake {
+
+struct SceneCommandOptions {
+  std::string input;  ///< built-in scene name or scene .json file
+};
+
+/// Adds the `scene` subcommand to `app`, filling `options` when it is parsed.
+CLI::App* addSceneCommand(CLI::App& app, SceneCommandOptions& options);
+
+/// Returns the process exit code. Errors are printed, never thrown.
+int sceneCommand(const SceneCommandOptions& options);
+
+}  // namespace softbake
