@@ -85,6 +85,8 @@ class ScratchFolder {
 struct StepRecord {
   std::vector<StageTimes> times;
   std::vector<std::uint32_t> pairs, contacts;
+  std::vector<int> frames;     ///< the frame each step computes
+  double framesSimulated = 0;  ///< whole frames, plus the finished part of a last partial one
   std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
   double simulationSeconds = 0;
 };
@@ -103,27 +105,40 @@ std::vector<ExportTiming> openExports(const Simulator& simulator, const fs::path
   return exports;
 }
 
-/// Runs `steps` measured substeps; after each frame's last substep, every export writes it.
-StepRecord runMeasuredSteps(Simulator& simulator, std::size_t steps,
+/// Runs frames 2, 3, … as `run` does, each with the substeps its integrator chooses for it, until
+/// frame `lastFrame`, or with `stepLimit` until that many substeps; after each frame's last
+/// substep, every export writes it.
+StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
+                            std::optional<std::size_t> stepLimit,
                             std::vector<ExportTiming>& exports) {
-  const int substeps = simulator.substeps().substeps;
   const double fps = simulator.topology().settings.fps;
   StepRecord record;
-  record.times.resize(steps);
-  record.pairs.resize(steps);
-  record.contacts.resize(steps);
+  const std::size_t expected =
+      stepLimit ? *stepLimit
+                : std::size_t(lastFrame - 1) * std::size_t(simulator.substeps().substeps);
+  record.times.reserve(expected);
+  record.pairs.reserve(expected);
+  record.contacts.reserve(expected);
+  record.frames.reserve(expected);
   Frame frame;
   simulator.measureStages(true);
-  for (std::size_t s = 0; s < steps; ++s) {
-    const int frameNumber = 2 + int(s / std::size_t(substeps));
-    const Clock::time_point start = Clock::now();
-    simulator.step(frameNumber);
-    record.simulationSeconds += secondsSince(start);
-    record.times[s] = simulator.lastStepTimes();
-    record.pairs[s] = std::uint32_t(simulator.lastStepCandidatePairs());
-    record.contacts[s] = std::uint32_t(simulator.contacts().size());
-    if (const auto solve = simulator.lastSolve()) record.solverIterations += solve->iterations;
-    if (!exports.empty() && (s + 1) % std::size_t(substeps) == 0) {
+  for (int frameNumber = 2; stepLimit || frameNumber <= lastFrame; ++frameNumber) {
+    simulator.beginFrame();
+    const int substeps = simulator.substeps().substeps;
+    int substep = 0;
+    for (; substep < substeps && !(stepLimit && record.times.size() == *stepLimit); ++substep) {
+      const Clock::time_point start = Clock::now();
+      simulator.step(frameNumber);
+      record.simulationSeconds += secondsSince(start);
+      record.times.push_back(simulator.lastStepTimes());
+      record.pairs.push_back(std::uint32_t(simulator.lastStepCandidatePairs()));
+      record.contacts.push_back(std::uint32_t(simulator.contacts().size()));
+      record.frames.push_back(frameNumber);
+      if (const auto solve = simulator.lastSolve()) record.solverIterations += solve->iterations;
+    }
+    record.framesSimulated += double(substep) / substeps;
+    if (substep < substeps) break;  // the step limit ended the run inside this frame
+    if (!exports.empty()) {
       frame.number = frameNumber;
       frame.time = (frameNumber - 1) / fps;
       frame.positions = simulator.state().position;
@@ -195,11 +210,10 @@ double printContactsAndExports(const StepRecord& record, const std::vector<Expor
 }
 
 /// One CSV row per step.
-void appendCsvRows(std::string& csv, const std::string& broadPhase, const StepRecord& record,
-                   int substeps) {
+void appendCsvRows(std::string& csv, const std::string& broadPhase, const StepRecord& record) {
   for (std::size_t s = 0; s < record.times.size(); ++s) {
     const StageTimes& t = record.times[s];
-    csv += cat(broadPhase, ",", s + 1, ",", 2 + s / std::size_t(substeps));
+    csv += cat(broadPhase, ",", s + 1, ",", record.frames[s]);
     for (int stage = 0; stage < kStageCount; ++stage)
       csv += cat(",", milliseconds(t.nanoseconds[stage]));
     csv += cat(",", milliseconds(t.total()), ",", record.pairs[s], ",", record.contacts[s], "\n");
@@ -238,15 +252,19 @@ int bench(const BenchOptions& options) {
     const SceneTopology& topology = simulator.topology();
     std::size_t faces = 0;
     for (const Body& body : topology.bodies) faces += body.triangleCount;
-    const int substeps = simulator.substeps().substeps;
-    const long requested = options.steps ? *options.steps : long(settings.frames - 1) * substeps;
-    if (requested < 1) throw Error("nothing to run: give --steps or at least 2 --frames");
-    const std::size_t steps = std::size_t(requested);
+    const SubstepChoice& substeps = simulator.substeps();
+    if (options.steps ? *options.steps < 1 : settings.frames < 2)
+      throw Error("nothing to run: give --steps or at least 2 --frames");
+    std::optional<std::size_t> stepLimit;
+    if (options.steps) stepLimit = std::size_t(*options.steps);
+    const bool rechosen = substeps.stableAtAnyStep && substeps.automatic;
     std::printf(
-        "bench '%s': %zu faces, %zu bodies, %zu particles; %zu steps of %.4g ms (%d per frame), "
+        "bench '%s': %zu faces, %zu bodies, %zu particles; %s, steps of %.4g ms (%d per frame%s), "
         "%s broad phase%s, %d threads%s, %s integrator\n",
-        scene.setup.name.c_str(), faces, topology.bodies.size(), topology.particleCount(), steps,
-        simulator.substeps().timeStep * 1e3, substeps, broadPhase.c_str(),
+        scene.setup.name.c_str(), faces, topology.bodies.size(), topology.particleCount(),
+        stepLimit ? cat(*stepLimit, " steps").c_str() : cat(settings.frames - 1, " frames").c_str(),
+        substeps.timeStep * 1e3, substeps.substeps,
+        rechosen ? " at the start, chosen again every frame" : "", broadPhase.c_str(),
         settings.collisions.pairCache ? " with the pair cache" : " every step", threads,
         options.warmupSteps ? cat(", after ", options.warmupSteps, " warm-up steps").c_str() : "",
         std::string(integratorName(settings.integrator)).c_str());
@@ -255,7 +273,8 @@ int bench(const BenchOptions& options) {
     std::vector<ExportTiming> exports;
     if (options.withExports) exports = openExports(simulator, exportFolder, scene.setup.name);
     for (long s = 0; s < options.warmupSteps; ++s) simulator.step(1);
-    const StepRecord record = runMeasuredSteps(simulator, steps, exports);
+    const StepRecord record = runMeasuredSteps(simulator, settings.frames, stepLimit, exports);
+    const std::size_t steps = record.times.size();
 
     const Spread step = printStages(record);
     const double contactsPerStep = printContactsAndExports(record, exports);
@@ -267,12 +286,13 @@ int bench(const BenchOptions& options) {
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
-        threads, options.warmupSteps, steps, stepsPerSecond, stepsPerSecond / substeps, step.median,
-        step.p95, contactsPerStep, peak, peak * 1048576.0 / double(faces),
+        threads, options.warmupSteps, steps, stepsPerSecond,
+        record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
+        peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
         double(record.solverIterations) / double(steps));
     std::fflush(stdout);
-    if (options.csv) appendCsvRows(csv, broadPhase, record, substeps);
+    if (options.csv) appendCsvRows(csv, broadPhase, record);
   }
   if (options.csv) {
     writeFileAtomically(*options.csv, csv);

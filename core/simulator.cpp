@@ -84,9 +84,13 @@ void Simulator::step(int frame) {
   clock.lap(Stage::Planes);
 }
 
-void Simulator::advanceToFrame(int frame) {
+void Simulator::beginFrame() {
   stats_ = {};
   if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
+}
+
+void Simulator::advanceToFrame(int frame) {
+  beginFrame();
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
 }
 

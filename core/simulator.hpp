@@ -78,8 +78,11 @@ class Simulator {
   /// (1-based, the frame being computed) goes into that message.
   void step(int frame);
 
-  /// All substeps from frame `frame − 1` to `frame`. Under the implicit integrator with "auto"
-  /// substeps, their count is chosen again first, from the speeds at the start of the frame.
+  /// Starts a frame: clears lastFrameStats() and, under the implicit and XPBD integrators with
+  /// "auto" substeps, chooses the frame's substeps again from the speeds now.
+  void beginFrame();
+
+  /// All substeps from frame `frame − 1` to `frame`: beginFrame(), then substeps().substeps steps.
   void advanceToFrame(int frame);
 
  private:
