@@ -14,7 +14,8 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
       forces_(*topology_),
       substepStart_(state_.position),
       substeps_(chooseSubsteps(*topology_, topology_->settings.substeps)),
-      detector_(topology_->settings.collisions) {
+      detector_(topology_->settings.collisions),
+      edgePushes_(topology_->particleCount()) {
   if (state_.position.size() != topology_->particleCount() ||
       state_.velocity.size() != topology_->particleCount())
     throw Error(cat("a simulation state of ", state_.position.size(), " positions and ",
@@ -70,8 +71,8 @@ void Simulator::step(int frame) {
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
     detector_.detect(topology, {substepStart_, state_.position}, &clock);
-    const CollisionResponseStats responses =
-        respondToCollisions(topology, detector_, response, state_, contacts_);
+    const CollisionResponseStats responses = respondToCollisions(
+        topology, detector_, response, state_, contacts_, Scalar(substeps_.timeStep), edgePushes_);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();

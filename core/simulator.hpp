@@ -100,6 +100,7 @@ class Simulator {
   StepStats stats_;
   CollisionDetector detector_;
   std::vector<Contact> contacts_;
+  EdgePushes edgePushes_;
   bool collides_ = false;
   std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;

@@ -18,6 +18,7 @@ struct ResponseScene {
   const CollisionGeometry& geometry = topology.collision;
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
+  const Scalar timeStep;       ///< of the substep, seconds
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
 };
 
@@ -52,9 +53,12 @@ Vec3 unitNormal(const ResponseScene& scene, Index triangle) {
 /// from `normal`, splitting both between the two sides by inverse mass: the particle takes
 /// invA/k of each change and corner i of the struck side −wᵢ·invBᵢ/k, with
 /// k = invA + Σ wᵢ²·invBᵢ, which gives the whole change at the contact point and leaves the total
-/// momentum unchanged. In the paper's mode the struck side has no share (invB = 0).
-bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, const Vec3& shift,
-             const Vec3& normal, Scalar restitution, Scalar friction, ResponseMode mode) {
+/// momentum unchanged. In the paper's mode the struck side has no share (invB = 0). Returns
+/// false, with nothing to move, when neither side can move.
+bool computeCorrection(const ResponseScene& scene, Index p, const StruckPoint& struck,
+                       const Vec3& shift, const Vec3& normal, Scalar restitution, Scalar friction,
+                       ResponseMode mode, Correction& correction) {
+  correction.count = 0;
   const Scalar invA = inverseMass(scene, p);
   std::array<Scalar, 6> invB{};
   Scalar k = invA;
@@ -67,8 +71,7 @@ bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, con
   Vec3 surfaceVelocity = Vec3::Zero();
   for (int i = 0; i < struck.count; ++i)
     surfaceVelocity += struck.weight[i] * velocity(scene, struck.vertex[i]);
-  const Vec3 relative =
-      (p < scene.geometry.particleCount ? scene.state.velocity[p] : Vec3::Zero()) - surfaceVelocity;
+  const Vec3 relative = velocity(scene, p) - surfaceVelocity;
   const Scalar normalSpeed = relative.dot(normal);
   Vec3 velocityChange = Vec3::Zero();
   if (normalSpeed < 0) {
@@ -80,16 +83,24 @@ bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, con
     velocityChange = keep * tangential - restitution * normalSpeed * normal - relative;
   }
 
-  if (invA > 0) {
-    scene.state.position[p] += (invA / k) * shift;
-    scene.state.velocity[p] += (invA / k) * velocityChange;
-  }
+  if (invA > 0) correction.add(p, (invA / k) * shift, (invA / k) * velocityChange);
   for (int i = 0; i < struck.count; ++i) {
     if (invB[i] == 0) continue;
-    const Index v = struck.vertex[i];
     const Scalar share = struck.weight[i] * invB[i] / k;
-    scene.state.position[v] -= share * shift;
-    scene.state.velocity[v] -= share * velocityChange;
+    correction.add(struck.vertex[i], -share * shift, -share * velocityChange);
+  }
+  return true;
+}
+
+/// Applies a correction at once.
+bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, const Vec3& shift,
+             const Vec3& normal, Scalar restitution, Scalar friction, ResponseMode mode) {
+  Correction correction;
+  if (!computeCorrection(scene, p, struck, shift, normal, restitution, friction, mode, correction))
+    return false;
+  for (int i = 0; i < correction.count; ++i) {
+    scene.state.position[correction.vertex[i]] += correction.shift[i];
+    scene.state.velocity[correction.vertex[i]] += correction.velocityChange[i];
   }
   return true;
 }
@@ -187,26 +198,34 @@ void respondToParticleContacts(const ResponseScene& scene, const std::vector<Par
   }
 }
 
-/// Records every edge contact; pushes an edge's end that lies inside a closed surface back out.
-void respondToEdgeContacts(const ResponseScene& scene, const std::vector<EdgeContact>& edges,
-                           ResponseMode mode, std::vector<Contact>& contacts,
-                           CollisionResponseStats& stats) {
+/// Records every edge contact.
+void recordEdgeContacts(const ResponseScene& scene, const std::vector<EdgeContact>& edges,
+                        std::vector<Contact>& contacts) {
   const CollisionGeometry& geometry = scene.geometry;
-  const bool respond = mode != ResponseMode::None;
   for (const EdgeContact& edge : edges) {
-    const Index surfaceA = geometry.triangleSurface[edge.edgeTriangle];
-    const Index surfaceB = geometry.triangleSurface[edge.triangle];
     Contact contact;
     contact.kind = ContactKind::EdgeTriangle;
     contact.position = edge.hit.point;
     contact.normal = unitNormal(scene, edge.triangle);
-    contact.surfaceA = surfaceA;
-    contact.surfaceB = surfaceB;
+    contact.surfaceA = geometry.triangleSurface[edge.edgeTriangle];
+    contact.surfaceB = geometry.triangleSurface[edge.triangle];
     contact.triangleA = edge.edgeTriangle;
     contact.triangleB = edge.triangle;
     contacts.push_back(contact);
-    if (!respond || !geometry.surfaceClosed[surfaceB]) continue;
+  }
+}
 
+/// One pass of edge pushes: each edge end that lies inside a closed surface is pushed back out.
+/// Every push of the pass is measured on the positions as the pass found them and gathered first,
+/// then all are applied, scaled (EdgePushes). Returns the pushes gathered.
+std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeContact>& edges,
+                            ResponseMode mode, EdgePushes& gathered) {
+  const CollisionGeometry& geometry = scene.geometry;
+  std::size_t pushes = 0;
+  Correction correction;
+  for (const EdgeContact& edge : edges) {
+    const Index surfaceB = geometry.triangleSurface[edge.triangle];
+    if (!geometry.surfaceClosed[surfaceB]) continue;
     // The end of the edge behind the face of a closed surface is inside it: back out through
     // the face's plane, lifted by the skin. Depth is measured now, after the responses before
     // this one, so an end already pushed out by another contact is left alone.
@@ -229,23 +248,54 @@ void respondToEdgeContacts(const ResponseScene& scene, const std::vector<EdgeCon
     for (Index end : ends) {
       const Scalar depth = normal.dot(scene.vertex(end) - facePoint);
       if (depth >= 0 || (scene.vertex(end) - facePoint).norm() > faceSize) continue;
-      if (correct(scene, end, struck, std::min(scene.skin - depth, maxPush) * normal, normal,
-                  geometry.restitution[surfaceB], geometry.friction[surfaceB], mode))
-        ++stats.edgePushes;
+      if (!computeCorrection(scene, end, struck, std::min(scene.skin - depth, maxPush) * normal,
+                             normal, geometry.restitution[surfaceB], geometry.friction[surfaceB],
+                             mode, correction))
+        continue;
+      ++pushes;
+      gathered.add(correction);
     }
   }
+  gathered.apply(scene.state);
+  return pushes;
 }
 
 }  // namespace
 
+EdgePushes::EdgePushes(std::size_t particles) : count_(particles, 0) {}
+
+void EdgePushes::add(const Correction& correction) {
+  corrections_.push_back(correction);
+  for (int i = 0; i < correction.count; ++i) ++count_[correction.vertex[i]];
+}
+
+void EdgePushes::apply(SimulationState& state) {
+  for (const Correction& correction : corrections_) {
+    std::uint32_t most = 1;
+    for (int i = 0; i < correction.count; ++i) most = std::max(most, count_[correction.vertex[i]]);
+    const Scalar share = Scalar(1) / Scalar(most);
+    for (int i = 0; i < correction.count; ++i) {
+      state.position[correction.vertex[i]] += share * correction.shift[i];
+      state.velocity[correction.vertex[i]] += share * correction.velocityChange[i];
+    }
+  }
+  for (const Correction& correction : corrections_)
+    for (int i = 0; i < correction.count; ++i) count_[correction.vertex[i]] = 0;
+  corrections_.clear();
+}
+
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
-                                           SimulationState& state, std::vector<Contact>& contacts) {
-  const ResponseScene scene{topology, state};
+                                           SimulationState& state, std::vector<Contact>& contacts,
+                                           Scalar timeStep, EdgePushes& edgePushes) {
+  const ResponseScene scene{topology, state, topology.collision, topology.settings.skin, timeStep};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);
-  respondToEdgeContacts(scene, detector.edgeContacts(), mode, contacts, stats);
+  recordEdgeContacts(scene, detector.edgeContacts(), contacts);
+  if (mode != ResponseMode::None)
+    for (int pass = 0; pass < kEdgePushPasses; ++pass)
+      stats.edgePushes += pushEdgeEndsOut(scene, detector.edgeContacts(), mode, edgePushes);
   return stats;
 }
 

@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -214,6 +217,41 @@ TEST_F(CliTest, EveryExampleSceneLoadsAndRunsAFewFrames) {
   }
   EXPECT_GE(count, 4);
 }
+
+/// Every example scene, by file name.
+std::vector<std::string> exampleNames() {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(examples()))
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+class ExampleBake : public CliTest,
+                    public ::testing::WithParamInterface<std::tuple<std::string, std::string>> {};
+
+/// The whole bake, to the example's last frame with its own settings: a blow-up anywhere fails it.
+TEST_P(ExampleBake, RunsToItsLastFrame) {
+  const auto& [example, integrator] = GetParam();
+  const fs::path scene = examples() / (example + ".json");
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run " + quoted(scene.string()) + " --no-render --integrator " +
+                                 integrator + " -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const nlohmann::json sceneJson = nlohmann::json::parse(readFile(scene));
+  const int frames = sceneJson["settings"].value("frames", 0);
+  ASSERT_GT(frames, 0);
+  char last[32];
+  std::snprintf(last, sizeof last, "_%04d.obj", frames);
+  EXPECT_TRUE(fs::exists(out / "obj" / (example + last))) << "the last frame was not written";
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryExampleUnderEveryIntegrator, ExampleBake,
+                         ::testing::Combine(::testing::ValuesIn(exampleNames()),
+                                            ::testing::Values("explicit", "implicit", "xpbd")),
+                         [](const auto& param) {
+                           return std::get<0>(param.param) + "_" + std::get<1>(param.param);
+                         });
 
 TEST(Version, PrintsTheVersion) {
   const Result run = runSoftbake("--version");

@@ -58,7 +58,9 @@ std::vector<Contact> collideOnce(test::StagedScene& scene, const Vec3& end, cons
   CollisionDetector detector(scene.topology.settings.collisions);
   detector.detect(scene.topology, {scene.substepStart, scene.state.position});
   std::vector<Contact> contacts;
-  respondToCollisions(scene.topology, detector, mode, scene.state, contacts);
+  EdgePushes edgePushes(scene.topology.particleCount());
+  respondToCollisions(scene.topology, detector, mode, scene.state, contacts, Scalar(1.0 / 240),
+                      edgePushes);
   return contacts;
 }
 
