@@ -82,12 +82,18 @@ VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology) 
 void describeSubsteps(const SubstepChoice& choice, IntegratorKind integrator) {
   const double boundMs = choice.boundTimeStep * 1e3, stepMs = choice.timeStep * 1e3;
   if (choice.stableAtAnyStep) {
+    char why[160] = "as given";
+    if (choice.automatic && choice.closingSpeed > 0)
+      std::snprintf(why, sizeof why,
+                    "auto, re-chosen every frame from how fast bodies close on each other: "
+                    "%.2f m/s now",
+                    choice.closingSpeed);
+    else if (choice.automatic)
+      std::snprintf(why, sizeof why,
+                    "auto, re-chosen every frame: no bodies close on each other now");
     std::printf(
-        "substeps: %d per frame (%s: %s integrator, stable at any step; time step %.4g "
-        "ms)\n",
-        choice.substeps,
-        choice.automatic ? "auto, re-chosen every frame from the fastest particle" : "as given",
-        std::string(integratorName(integrator)).c_str(), stepMs);
+        "substeps: %d per frame (%s; %s integrator, stable at any step; time step %.4g ms)\n",
+        choice.substeps, why, std::string(integratorName(integrator)).c_str(), stepMs);
   } else if (!std::isfinite(choice.boundTimeStep)) {
     std::printf("substeps: %d per frame (no springs: no stability bound)\n", choice.substeps);
   } else if (choice.automatic) {

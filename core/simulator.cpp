@@ -39,7 +39,10 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
 }
 
 void Simulator::chooseContactAccuracySubsteps() {
-  substeps_.substeps = contactAccuracySubsteps(*topology_, state_.velocity, shortestEdge_);
+  const ContactAccuracy accuracy = contactAccuracySubsteps(
+      *topology_, state_.position, state_.velocity, detector_.candidatePairs(), shortestEdge_);
+  substeps_.substeps = accuracy.substeps;
+  substeps_.closingSpeed = accuracy.closingSpeed;
   // XPBD's springs soften at steps past the explicit bound (core/dynamics/xpbd.hpp).
   if (xpbd_) substeps_.substeps = std::max(substeps_.substeps, substeps_.minimumStableSubsteps);
   substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace softbake {
 
@@ -46,16 +48,121 @@ SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested) {
   return choice;
 }
 
-int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3> velocities,
-                            double shortestEdge) {
+namespace {
+
+/// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
+struct SurfaceMotion {
+  Box3 box;
+  Vec3d meanVelocity = Vec3d::Zero();
+  double deviation = 0;  ///< the largest |v − mean| over its vertices
+  double fastest = 0;    ///< the largest |v| over its vertices
+  bool moving = false;
+};
+
+SurfaceMotion softSurfaceMotion(const SceneTopology& topology, const Body& body,
+                                std::span<const Vec3> positions, std::span<const Vec3> velocities) {
+  SurfaceMotion motion;
+  motion.moving = true;
+  const Index end = body.firstParticle + body.particleCount;
+  double mass = 0;
+  for (Index i = body.firstParticle; i < end; ++i) {
+    motion.box.extend(positions[i]);
+    motion.meanVelocity += double(topology.mass[i]) * velocities[i].cast<double>();
+    mass += double(topology.mass[i]);
+  }
+  if (mass > 0) motion.meanVelocity /= mass;
+  for (Index i = body.firstParticle; i < end; ++i) {
+    motion.deviation =
+        std::max(motion.deviation, (velocities[i].cast<double>() - motion.meanVelocity).norm());
+    motion.fastest = std::max(motion.fastest, double(velocities[i].norm()));
+  }
+  return motion;
+}
+
+SurfaceMotion staticSurfaceMotion(const CollisionGeometry& geometry,
+                                  const CollisionSurface& surface) {
+  SurfaceMotion motion;
+  for (Index t = surface.firstTriangle; t < surface.firstTriangle + surface.triangleCount; ++t)
+    for (Index v : geometry.triangleVertices[t]) motion.box.extend(geometry.vertex({}, v));
+  return motion;
+}
+
+double travel(const SurfaceMotion& motion, double gravitySpeed) {
+  return motion.moving ? motion.meanVelocity.norm() + motion.deviation + gravitySpeed : 0.0;
+}
+
+}  // namespace
+
+ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
+                                        std::span<const Vec3> positions,
+                                        std::span<const Vec3> velocities,
+                                        std::span<const TrianglePair> touching,
+                                        double shortestEdge) {
   const double frameTime = 1.0 / topology.settings.fps;
-  double fastest = 0;
-  for (const Vec3& v : velocities) fastest = std::max(fastest, double(v.norm()));
-  fastest += double(topology.settings.gravity.norm()) * frameTime;
-  const double reach = kContactReachFraction * (double(topology.settings.skin) + shortestEdge);
-  if (!(reach > 0) || !std::isfinite(fastest)) return kMaxAutoSubsteps;
-  const double substeps = std::ceil(fastest * frameTime / reach);
-  return int(std::clamp(substeps, 1.0, double(kMaxAutoSubsteps)));
+  const double gravitySpeed = double(topology.settings.gravity.norm()) * frameTime;
+  const double skin = double(topology.settings.skin);
+  const CollisionGeometry& geometry = topology.collision;
+  const auto vertexVelocity = [&](Index v) {
+    return v < geometry.particleCount ? velocities[v] : Vec3::Zero().eval();
+  };
+
+  // Surfaces already in contact: the speed of the fastest corner of a touching triangle pair, the
+  // measure kContactReachFraction was calibrated with (their relative speed would be up to twice
+  // that, and the response's velocity noise at contacts makes it so).
+  ContactAccuracy choice;
+  std::vector<std::uint64_t> touchingSurfaces;
+  touchingSurfaces.reserve(touching.size());
+  for (const TrianglePair& pair : touching) {
+    double closing = 0;
+    for (const Index triangle : {pair.first, pair.second})
+      for (Index v : geometry.triangleVertices[triangle])
+        closing = std::max(closing, double(vertexVelocity(v).norm()));
+    choice.closingSpeed = std::max(choice.closingSpeed, closing + gravitySpeed);
+    const std::uint64_t a = geometry.triangleSurface[pair.first];
+    const std::uint64_t b = geometry.triangleSurface[pair.second];
+    touchingSurfaces.push_back(std::min(a, b) << 32 | std::max(a, b));
+  }
+  std::sort(touchingSurfaces.begin(), touchingSurfaces.end());
+  const auto inContact = [&](std::uint64_t a, std::uint64_t b) {
+    return std::binary_search(touchingSurfaces.begin(), touchingSurfaces.end(),
+                              std::min(a, b) << 32 | std::max(a, b));
+  };
+
+  // Surfaces not in contact yet: how fast they can close, if they can meet within the frame.
+  std::vector<SurfaceMotion> motion;
+  motion.reserve(geometry.surfaces.size());
+  for (std::size_t s = 0; s < geometry.surfaces.size(); ++s)
+    motion.push_back(s < topology.bodies.size()
+                         ? softSurfaceMotion(topology, topology.bodies[s], positions, velocities)
+                         : staticSurfaceMotion(geometry, geometry.surfaces[s]));
+  for (std::size_t a = 0; a < motion.size(); ++a) {
+    if (!motion[a].moving) continue;
+    if (geometry.surfaces[a].selfCollision && !inContact(a, a))
+      choice.closingSpeed = std::max(choice.closingSpeed, 2 * motion[a].deviation + gravitySpeed);
+    for (std::size_t b = 0; b < motion.size(); ++b) {
+      if (b == a || (motion[b].moving && b < a) || inContact(a, b)) continue;  // each pair once
+      const double reachA = travel(motion[a], gravitySpeed) * frameTime + skin;
+      const double reachB = travel(motion[b], gravitySpeed) * frameTime + skin;
+      const Vec3 lowA = motion[a].box.min().array() - Scalar(reachA);
+      const Vec3 highA = motion[a].box.max().array() + Scalar(reachA);
+      const Vec3 lowB = motion[b].box.min().array() - Scalar(reachB);
+      const Vec3 highB = motion[b].box.max().array() + Scalar(reachB);
+      if ((highA.array() < lowB.array()).any() || (highB.array() < lowA.array()).any()) continue;
+      const double closing = std::min((motion[a].meanVelocity - motion[b].meanVelocity).norm() +
+                                          motion[a].deviation + motion[b].deviation,
+                                      std::max(motion[a].fastest, motion[b].fastest)) +
+                             gravitySpeed;
+      choice.closingSpeed = std::max(choice.closingSpeed, closing);
+    }
+  }
+  const double reach = kContactReachFraction * (skin + shortestEdge);
+  if (!(reach > 0) || !std::isfinite(choice.closingSpeed)) {
+    choice.substeps = kMaxAutoSubsteps;
+    return choice;
+  }
+  const double substeps = std::ceil(choice.closingSpeed * frameTime / reach);
+  choice.substeps = int(std::clamp(substeps, double(kMinAutoSubsteps), double(kMaxAutoSubsteps)));
+  return choice;
 }
 
 double shortestEdge(const SceneTopology& topology) {

@@ -9,6 +9,7 @@
 
 #include <span>
 
+#include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_topology.hpp"
 
 namespace softbake {
@@ -33,28 +34,51 @@ struct SubstepChoice {
   /// "auto" is chosen by contactAccuracySubsteps() every frame (for XPBD, never below
   /// minimumStableSubsteps, which keeps its springs' stiffness).
   bool stableAtAnyStep = false;
+  /// Under "auto" of those integrators: the closing speed that set the count, m/s (0: no two
+  /// surfaces can meet within the frame, so the count is the floor, kMinAutoSubsteps).
+  double closingSpeed = 0;
   bool belowBound() const { return !stableAtAnyStep && substeps < minimumStableSubsteps; }
 };
 
 /// `requested` 0 means automatic: enough substeps to stay under kStabilitySafety of the bound.
 SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested);
 
-/// The most substeps per frame "auto" gives the integrators that are stable at any step.
+/// The fewest and the most substeps per frame "auto" gives the integrators that are stable at any
+/// step. The floor keeps the implicit integrator's numerical damping moderate where nothing is
+/// about to touch: at one substep per frame a dropped rubber ball barely bounces.
+inline constexpr int kMinAutoSubsteps = 4;
 inline constexpr int kMaxAutoSubsteps = 64;
 
-/// The part of (skin + shortest edge) the fastest particle may cover in one substep of an
+/// The part of (skin + shortest edge) two surfaces may close on each other in one substep of an
 /// integrator that is stable at any step.
 /// Measured: at a tenth, bodies thrown at each other and dropped on a static sphere stay free of
 /// intersecting triangles (tests/core/collision_test); at a half they did not.
 inline constexpr double kContactReachFraction = 0.1;
 
 /// "auto" substeps of the implicit and XPBD integrators, which are stable at any step, so the
-/// count is set by contact accuracy: over one substep the fastest particle (its speed now plus what
-/// gravity adds over the frame) moves at most kContactReachFraction of the skin plus the shortest
-/// rest edge, so the segment tests of §2.3 see each crossing from nearby. Re-chosen every frame; 1
-/// to kMaxAutoSubsteps.
-int contactAccuracySubsteps(const SceneTopology& topology, std::span<const Vec3> velocities,
-                            double shortestEdge);
+/// count is set by contact accuracy: over one substep, two collision surfaces that can meet within
+/// the frame close on each other by at most kContactReachFraction of the skin plus the shortest
+/// rest edge, so the segment tests of §2.3 see each crossing from nearby. Only closing speed
+/// counts: a body's own translation does not, so a body flying alone, or bodies falling side by
+/// side, take few substeps. A pair's closing speed is the difference of the two surfaces' mean
+/// velocities (mass-weighted) plus each one's largest deviation from its mean (deformation and
+/// spin), or the speed of the faster surface's fastest vertex where that is less (the measure
+/// kContactReachFraction was calibrated with), plus what gravity adds over the frame. Surfaces
+/// already in contact (`touching`: the broad phase's triangle pairs of the latest substep) count
+/// with the speed of the fastest corner of a touching triangle pair plus gravity's. Any other pair
+/// counts when its bounding boxes, each grown by how far it can travel in the frame plus the skin,
+/// overlap; a self-colliding body counts against itself. Ground planes are not surfaces here: their
+/// contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps to
+/// kMaxAutoSubsteps.
+struct ContactAccuracy {
+  int substeps = kMinAutoSubsteps;
+  double closingSpeed = 0;  ///< m/s, the largest over the pairs that can meet within the frame
+};
+ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
+                                        std::span<const Vec3> positions,
+                                        std::span<const Vec3> velocities,
+                                        std::span<const TrianglePair> touching,
+                                        double shortestEdge);
 
 /// The shortest rest length of any structural spring, scene units; infinity when there is none.
 double shortestEdge(const SceneTopology& topology);

@@ -1,8 +1,8 @@
 // What both integrators that are stable at any step (backward Euler and XPBD) must do: hold
 // where explicit Euler blows up, conserve momentum, follow the ballistic path in free flight,
-// keep a resting body's volume, choose "auto" substeps from the fastest particle, and give the
-// same bytes on any thread count. The solver-specific checks live in implicit_euler_test and
-// xpbd_test.
+// keep a resting body's volume, choose "auto" substeps from how fast bodies close on each other,
+// and give the same bytes on any thread count. The solver-specific checks live in
+// implicit_euler_test and xpbd_test.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -112,19 +112,51 @@ TEST_P(StableIntegrator, ABallRestingOnTheGroundKeepsItsVolumeForTenSeconds) {
   EXPECT_LT(test::centroid(simulator.state()).y(), 0.6) << "on the ground";
 }
 
-TEST_P(StableIntegrator, AutoSubstepsFollowTheFastestParticle) {
-  // Jelly: soft enough that XPBD's floor (the explicit bound) sits below the contact rule's cap.
-  SceneSetup scene = ball("jelly");
-  Simulator slow(buildSceneTopology(scene));
-  scene.bodies[0].velocity = Vec3(0, -30, 0);
-  Simulator fast(buildSceneTopology(scene));
-  EXPECT_TRUE(slow.substeps().automatic);
-  EXPECT_FALSE(slow.substeps().belowBound()) << "no stability bound applies";
-  EXPECT_GT(fast.substeps().substeps, slow.substeps().substeps);
-  EXPECT_EQ(fast.substeps().substeps, kMaxAutoSubsteps) << "the contact rule's cap";
-  if (GetParam() == IntegratorKind::Xpbd) {
-    EXPECT_EQ(slow.substeps().substeps, slow.substeps().minimumStableSubsteps);
+/// Two jelly balls 1.2 m apart on x, each with `velocity`, the second with `velocity` mirrored on
+/// x when `towardEachOther`. Jelly: soft enough that XPBD's floor (the explicit bound) sits below
+/// the contact rule's cap.
+SceneSetup twoBalls(IntegratorKind integrator, const Vec3& velocity, bool towardEachOther) {
+  SceneSetup scene;
+  scene.settings.integrator = integrator;
+  for (float x : {-0.6f, 0.6f}) {
+    BodySetup body;
+    body.name = x < 0 ? "left" : "right";
+    body.mesh = makeIcosphere(3, 0.4f, Vec3f(x, 2, 0));
+    body.material = *findMaterialPreset("jelly");
+    body.velocity = velocity;
+    if (x > 0 && towardEachOther) body.velocity.x() = -velocity.x();
+    scene.bodies.push_back(body);
   }
+  scene.planes.push_back(PlaneCollider{});
+  return scene;
+}
+
+TEST_P(StableIntegrator, AutoSubstepsFollowHowFastBodiesCloseOnEachOther) {
+  const Vec3 fast(30, 0, 0);
+  Simulator closing(buildSceneTopology(twoBalls(GetParam(), fast, true)));
+  Simulator sideBySide(buildSceneTopology(twoBalls(GetParam(), fast, false)));
+  SceneSetup alone = twoBalls(GetParam(), fast, false);
+  alone.bodies.pop_back();
+  Simulator flyingAlone(buildSceneTopology(alone));
+  EXPECT_TRUE(closing.substeps().automatic);
+  EXPECT_FALSE(closing.substeps().belowBound()) << "no stability bound applies";
+  EXPECT_EQ(closing.substeps().substeps, kMaxAutoSubsteps) << "the cap";
+  // 60 m/s apart, counted as the faster body's fastest vertex, plus gravity over a frame.
+  EXPECT_NEAR(closing.substeps().closingSpeed, 30 + 9.81 / 24, 1e-3);
+  // Moving together, or alone over the ground, nothing closes but what gravity adds.
+  EXPECT_NEAR(sideBySide.substeps().closingSpeed, 9.81 / 24, 1e-3);
+  EXPECT_EQ(flyingAlone.substeps().closingSpeed, 0.0) << "a ground plane needs no substeps";
+  const int floor = GetParam() == IntegratorKind::Xpbd
+                        ? std::max(kMinAutoSubsteps, sideBySide.substeps().minimumStableSubsteps)
+                        : kMinAutoSubsteps;
+  EXPECT_EQ(flyingAlone.substeps().substeps, floor);
+  EXPECT_LT(sideBySide.substeps().substeps, closing.substeps().substeps);
+  // 0.4 m apart: at 6 m/s each they can meet within the frame, at 3 m/s they cannot.
+  Simulator slower(buildSceneTopology(twoBalls(GetParam(), Vec3(6, 0, 0), true)));
+  EXPECT_LT(slower.substeps().substeps, closing.substeps().substeps);
+  EXPECT_NEAR(slower.substeps().closingSpeed, 6 + 9.81 / 24, 1e-3);
+  Simulator notThisFrame(buildSceneTopology(twoBalls(GetParam(), Vec3(3, 0, 0), true)));
+  EXPECT_EQ(notThisFrame.substeps().closingSpeed, 0.0);
 }
 
 TEST_P(StableIntegrator, OneAndTwoThreadsGiveTheSameBytes) {
