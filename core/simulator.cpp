@@ -39,8 +39,9 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
 }
 
 void Simulator::chooseContactAccuracySubsteps() {
-  const ContactAccuracy accuracy = contactAccuracySubsteps(
-      *topology_, state_.position, state_.velocity, detector_.candidatePairs(), shortestEdge_);
+  const ContactAccuracy accuracy =
+      contactAccuracySubsteps(*topology_, state_.position, state_.velocity,
+                              detector_.candidatePairs(), shortestEdge_, contactAccuracyScratch_);
   substeps_.substeps = accuracy.substeps;
   substeps_.closingSpeed = accuracy.closingSpeed;
   // XPBD's springs soften at steps past the explicit bound (core/dynamics/xpbd.hpp).

@@ -97,6 +97,7 @@ class Simulator {
   std::optional<Xpbd> xpbd_;               ///< set under the XPBD integrator
   double shortestEdge_ = 0;  ///< for "auto" substeps of the integrators stable at any step
   SubstepChoice substeps_;
+  ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;
   CollisionDetector detector_;
   std::vector<Contact> contacts_;

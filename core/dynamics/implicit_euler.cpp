@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <tuple>
 
 #include "core/dynamics/integrator.hpp"
 
@@ -14,8 +15,9 @@ namespace softbake {
 namespace {
 constexpr std::size_t kSpringGrain = 4096;
 constexpr std::size_t kParticleGrain = 2048;
-/// Particles per dot-product chunk: the chunks, not the threads, fix the summation order.
-constexpr std::size_t kDotChunk = 4096;
+/// Particles per chunk of the fused CG passes: the chunks, not the threads, fix the summation
+/// order; small enough that two threads share the work of a 5 000-particle scene evenly.
+constexpr std::size_t kChunk = 1024;
 
 /// Runs body(i) for every particle in parallel.
 template <class Body>
@@ -25,10 +27,15 @@ void forEachParticle(std::size_t count, const Body& body) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) body(Index(i));
                     });
 }
+
+double dot(const Vec3& a, const Vec3& b) {
+  return double(a.x()) * b.x() + double(a.y()) * b.y() + double(a.z()) * b.z();
+}
 }  // namespace
 
 ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
-    : springBlock_(topology.springs.size(), Block::Zero()),
+    : rowStart_(topology.particleCount() + 1, 0),
+      springBlock_(topology.springs.size()),
       springVelocity_(topology.springs.size(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
       inverseDiagonal_(topology.particleCount(), Vec3::Zero()),
@@ -37,7 +44,48 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       preconditioned_(topology.particleCount(), Vec3::Zero()),
       direction_(topology.particleCount(), Vec3::Zero()),
       product_(topology.particleCount(), Vec3::Zero()),
-      chunkSum_((topology.particleCount() + kDotChunk - 1) / kDotChunk, 0.0) {}
+      chunkSum_((topology.particleCount() + kChunk - 1) / kChunk) {
+  deltaV_.push_back(Vec3::Zero());  // the zero entry pinned neighbours read
+  direction_.push_back(Vec3::Zero());
+  for (Index i = 0; i < topology.particleCount(); ++i) {
+    rowStart_[i] = Index(rowNeighbour_.size());
+    if (topology.inverseMass[i] == 0) continue;  // a pinned row is zero
+    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
+      const Index ref = topology.springRefs[r];
+      const Spring& spring = topology.springs[ref >> 1];
+      const Index other = (ref & 1) ? spring.a : spring.b;
+      // A pinned column: its Δv is zero, so it reads the always-zero entry past the particles.
+      rowNeighbour_.push_back(topology.inverseMass[other] == 0 ? topology.particleCount() : other);
+      rowSpring_.push_back(ref >> 1);
+    }
+  }
+  rowStart_.back() = Index(rowNeighbour_.size());
+  for (Index b = 0; b < topology.bodies.size(); ++b) {
+    const Body& body = topology.bodies[b];
+    bool pinned = false;
+    for (Index i = body.firstParticle; i < body.firstParticle + body.particleCount; ++i)
+      pinned = pinned || topology.inverseMass[i] == 0;
+    if (!pinned && body.particleCount > 0) freeBodies_.push_back(b);
+  }
+}
+
+void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
+  // Internal forces cancel within a body, in b and in A·Δv alike, so the exact solution changes a
+  // free body's momentum by Σ b (its external impulse) alone. CG stops at a residual whose sum is
+  // not zero; the body's share of it, spread as one velocity, is removed.
+  tbb::parallel_for(std::size_t(0), freeBodies_.size(), [&](std::size_t k) {
+    const Body& body = topology.bodies[freeBodies_[k]];
+    const Index end = body.firstParticle + body.particleCount;
+    Vec3d excess = Vec3d::Zero();
+    double mass = 0;
+    for (Index i = body.firstParticle; i < end; ++i) {
+      excess += rhs_[i].cast<double>() - double(topology.mass[i]) * deltaV_[i].cast<double>();
+      mass += double(topology.mass[i]);
+    }
+    const Vec3 correction = (excess / mass).cast<Scalar>();
+    for (Index i = body.firstParticle; i < end; ++i) deltaV_[i] += correction;
+  });
+}
 
 void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                              const SimulationState& state) {
@@ -45,7 +93,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
   const Spring* springs = topology.springs.data();
   const Vec3* x = state.position.data();
   const Vec3* v = state.velocity.data();
-  Block* blocks = springBlock_.data();
+  SpringBlock* blocks = springBlock_.data();
   Vec3* springVelocity = springVelocity_.data();
   const Scalar h = dt, h2 = dt * dt;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.springs.size(), kSpringGrain),
@@ -55,19 +103,19 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
                         const Vec3 d = x[spring.b] - x[spring.a];
                         const Scalar length = d.norm();
                         if (!(length > Scalar(0))) {
-                          blocks[s].setZero();
+                          blocks[s] = {};
                           springVelocity[s].setZero();
                           continue;
                         }
-                        const Vec3 axis = d / length;
-                        const Block along = axis * axis.transpose();
-                        // ∂f_a/∂x_b: k·(d̂d̂ᵀ + (1 − L/l)(I − d̂d̂ᵀ)), transverse part clamped at 0.
+                        // ∂f_a/∂x_b = k·(d̂d̂ᵀ + t·(I − d̂d̂ᵀ)) = k·((1 − t)·d̂d̂ᵀ + t·I), with the
+                        // transverse factor t = 1 − L/l clamped at 0.
                         const Scalar transverse =
                             std::max(Scalar(0), Scalar(1) - spring.restLength / length);
-                        const Block stiffness =
-                            spring.stiffness * (along + transverse * (Block::Identity() - along));
-                        blocks[s] = (h * spring.damping) * along + h2 * stiffness;
-                        springVelocity[s] = h2 * (stiffness * (v[spring.b] - v[spring.a]));
+                        SpringBlock stiffness{d / length, spring.stiffness * (1 - transverse),
+                                              spring.stiffness * transverse};
+                        springVelocity[s] = h2 * stiffness.times(v[spring.b] - v[spring.a]);
+                        blocks[s] = {stiffness.axis, h * spring.damping + h2 * stiffness.along,
+                                     h2 * stiffness.isotropic};
                       }
                     });
 
@@ -90,87 +138,104 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
         b -= springVelocity_[s];
       else
         b += springVelocity_[s];
-      diagonal += springBlock_[s].diagonal();
+      const SpringBlock& block = springBlock_[s];
+      diagonal +=
+          block.along * block.axis.cwiseProduct(block.axis) + Vec3::Constant(block.isotropic);
     }
     rhs_[i] = b;
     inverseDiagonal_[i] = diagonal.cwiseInverse();
   });
 }
 
-void ImplicitEuler::multiply(const SceneTopology& topology, const std::vector<Vec3>& in,
-                             std::vector<Vec3>& out) const {
-  const Scalar* mass = topology.mass.data();
-  const Scalar* inverseMass = topology.inverseMass.data();
-  const Spring* springs = topology.springs.data();
-  forEachParticle(topology.particleCount(), [&](Index i) {
-    if (inverseMass[i] == 0) {  // the constraint filter: pinned rows are zero
-      out[i].setZero();
-      return;
-    }
-    Vec3 sum = mass[i] * in[i];
-    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
-      const Index ref = topology.springRefs[r];
-      const Spring& spring = springs[ref >> 1];
-      const Index other = (ref & 1) ? spring.a : spring.b;
-      // A pinned neighbour's Δv is zero: its column is filtered out too.
-      const Vec3 otherIn = inverseMass[other] == 0 ? Vec3::Zero() : in[other];
-      sum += springBlock_[ref >> 1] * (in[i] - otherIn);
-    }
-    out[i] = sum;
+template <class Chunk>
+std::pair<double, double> ImplicitEuler::sumOverChunks(std::size_t count, const Chunk& chunk) {
+  tbb::parallel_for(std::size_t(0), chunkSum_.size(), [&](std::size_t c) {
+    chunkSum_[c] = chunk(c * kChunk, std::min(count, (c + 1) * kChunk));
   });
+  std::pair<double, double> total{0, 0};
+  for (const auto& [first, second] : chunkSum_) {
+    total.first += first;
+    total.second += second;
+  }
+  return total;
 }
 
-double ImplicitEuler::dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  const std::size_t count = a.size();
-  tbb::parallel_for(std::size_t(0), chunkSum_.size(), [&](std::size_t chunk) {
-    double sum = 0;
-    const std::size_t end = std::min(count, (chunk + 1) * kDotChunk);
-    for (std::size_t i = chunk * kDotChunk; i < end; ++i)
-      sum +=
-          double(a[i].x()) * b[i].x() + double(a[i].y()) * b[i].y() + double(a[i].z()) * b[i].z();
-    chunkSum_[chunk] = sum;
-  });
-  double total = 0;
-  for (double sum : chunkSum_) total += sum;
-  return total;
+double ImplicitEuler::multiplyDirection(const SceneTopology& topology) {
+  const Scalar* mass = topology.mass.data();
+  const Scalar* inverseMass = topology.inverseMass.data();
+  return sumOverChunks(
+             topology.particleCount(),
+             [&](std::size_t begin, std::size_t end) {
+               double curvature = 0;
+               for (std::size_t i = begin; i < end; ++i) {
+                 if (inverseMass[i] == 0) {  // the constraint filter: pinned rows are zero
+                   product_[i].setZero();
+                   continue;
+                 }
+                 const Vec3 in = direction_[i];
+                 Vec3 sum = mass[i] * in;
+                 for (Index r = rowStart_[i]; r < rowStart_[i + 1]; ++r)
+                   sum += springBlock_[rowSpring_[r]].times(in - direction_[rowNeighbour_[r]]);
+                 product_[i] = sum;
+                 curvature += dot(in, sum);
+               }
+               return std::pair<double, double>{curvature, 0};
+             })
+      .first;
 }
 
 void ImplicitEuler::solve(const SceneTopology& topology) {
   // Preconditioned CG (Shewchuk 1994, B3), warm-started from the previous step's Δv: successive
   // steps change velocity alike, so the first residual is already small. Pinned entries stay 0.
   const std::size_t n = topology.particleCount();
-  multiply(topology, deltaV_, product_);
-  forEachParticle(n, [&](Index i) {
-    residual_[i] = rhs_[i] - product_[i];
-    preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
-    direction_[i] = preconditioned_[i];
+  std::swap(direction_, deltaV_);  // the product of the warm start, computed into product_
+  multiplyDirection(topology);
+  std::swap(direction_, deltaV_);
+  auto [rz, rhsSquared] = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
+    double rzChunk = 0, bb = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      residual_[i] = rhs_[i] - product_[i];
+      preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
+      direction_[i] = preconditioned_[i];
+      rzChunk += dot(residual_[i], preconditioned_[i]);
+      bb += dot(rhs_[i], rhs_[i]);
+    }
+    return std::pair<double, double>{rzChunk, bb};
   });
-  const double rhsNorm = std::sqrt(dot(rhs_, rhs_));
-  double rz = dot(residual_, preconditioned_);
+  const double rhsNorm = std::sqrt(rhsSquared);
   stats_ = {};
   if (rhsNorm == 0) {
     forEachParticle(n, [&](Index i) { deltaV_[i].setZero(); });
     return;
   }
   const double tolerance = kTolerance * rhsNorm;
-  stats_.relativeResidual = std::sqrt(dot(residual_, residual_)) / rhsNorm;
+  double residualSquared = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
+                             double rr = 0;
+                             for (std::size_t i = begin; i < end; ++i)
+                               rr += dot(residual_[i], residual_[i]);
+                             return std::pair<double, double>{rr, 0};
+                           }).first;
+  stats_.relativeResidual = std::sqrt(residualSquared) / rhsNorm;
   if (stats_.relativeResidual <= kTolerance) return;
   for (int iteration = 1; iteration <= kMaxIterations; ++iteration) {
-    multiply(topology, direction_, product_);
-    const double curvature = dot(direction_, product_);
+    const double curvature = multiplyDirection(topology);
     if (!(curvature > 0)) break;  // converged to rounding, or a degenerate direction
     const Scalar alpha = Scalar(rz / curvature);
-    forEachParticle(n, [&](Index i) {
-      deltaV_[i] += alpha * direction_[i];
-      residual_[i] -= alpha * product_[i];
+    double rzNext = 0;
+    std::tie(residualSquared, rzNext) = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
+      double rr = 0, rzChunk = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        deltaV_[i] += alpha * direction_[i];
+        residual_[i] -= alpha * product_[i];
+        preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
+        rr += dot(residual_[i], residual_[i]);
+        rzChunk += dot(residual_[i], preconditioned_[i]);
+      }
+      return std::pair<double, double>{rr, rzChunk};
     });
     stats_.iterations = iteration;
-    const double residualNorm = std::sqrt(dot(residual_, residual_));
-    stats_.relativeResidual = residualNorm / rhsNorm;
-    if (residualNorm <= tolerance) break;
-    forEachParticle(
-        n, [&](Index i) { preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]); });
-    const double rzNext = dot(residual_, preconditioned_);
+    stats_.relativeResidual = std::sqrt(residualSquared) / rhsNorm;
+    if (std::sqrt(residualSquared) <= tolerance) break;
     const Scalar beta = Scalar(rzNext / rz);
     rz = rzNext;
     forEachParticle(n, [&](Index i) { direction_[i] = preconditioned_[i] + beta * direction_[i]; });
@@ -181,6 +246,7 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
                          SimulationState& state, std::span<Vec3> substepStart) {
   assemble(topology, forces, dt, state);
   solve(topology);
+  restoreMomentum(topology);
   const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
   const Scalar* inverseMass = topology.inverseMass.data();
   std::atomic<bool> runaway{false};

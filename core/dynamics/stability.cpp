@@ -50,15 +50,6 @@ SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested) {
 
 namespace {
 
-/// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
-struct SurfaceMotion {
-  Box3 box;
-  Vec3d meanVelocity = Vec3d::Zero();
-  double deviation = 0;  ///< the largest |v − mean| over its vertices
-  double fastest = 0;    ///< the largest |v| over its vertices
-  bool moving = false;
-};
-
 SurfaceMotion softSurfaceMotion(const SceneTopology& topology, const Body& body,
                                 std::span<const Vec3> positions, std::span<const Vec3> velocities) {
   SurfaceMotion motion;
@@ -96,8 +87,8 @@ double travel(const SurfaceMotion& motion, double gravitySpeed) {
 ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
-                                        std::span<const TrianglePair> touching,
-                                        double shortestEdge) {
+                                        std::span<const TrianglePair> touching, double shortestEdge,
+                                        ContactAccuracyScratch& scratch) {
   const double frameTime = 1.0 / topology.settings.fps;
   const double gravitySpeed = double(topology.settings.gravity.norm()) * frameTime;
   const double skin = double(topology.settings.skin);
@@ -110,8 +101,8 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   // measure kContactReachFraction was calibrated with (their relative speed would be up to twice
   // that, and the response's velocity noise at contacts makes it so).
   ContactAccuracy choice;
-  std::vector<std::uint64_t> touchingSurfaces;
-  touchingSurfaces.reserve(touching.size());
+  std::vector<std::uint64_t>& touchingSurfaces = scratch.touchingSurfaces;
+  touchingSurfaces.clear();
   for (const TrianglePair& pair : touching) {
     double closing = 0;
     for (const Index triangle : {pair.first, pair.second})
@@ -129,8 +120,8 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   };
 
   // Surfaces not in contact yet: how fast they can close, if they can meet within the frame.
-  std::vector<SurfaceMotion> motion;
-  motion.reserve(geometry.surfaces.size());
+  std::vector<SurfaceMotion>& motion = scratch.motion;
+  motion.clear();
   for (std::size_t s = 0; s < geometry.surfaces.size(); ++s)
     motion.push_back(s < topology.bodies.size()
                          ? softSurfaceMotion(topology, topology.bodies[s], positions, velocities)

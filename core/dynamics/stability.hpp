@@ -7,7 +7,9 @@
 /// the particle's springs. Solving for h gives h < (√(γ² + 4ω²) − γ)/ω². Gas pressure and contacts
 /// add much softer modes and are left out; the safety factor covers them.
 
+#include <cstdint>
 #include <span>
+#include <vector>
 
 #include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -70,15 +72,30 @@ inline constexpr double kContactReachFraction = 0.1;
 /// overlap; a self-colliding body counts against itself. Ground planes are not surfaces here: their
 /// contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps to
 /// kMaxAutoSubsteps.
+/// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
+struct SurfaceMotion {
+  Box3 box;
+  Vec3d meanVelocity = Vec3d::Zero();
+  double deviation = 0;  ///< the largest |v − mean| over its vertices
+  double fastest = 0;    ///< the largest |v| over its vertices
+  bool moving = false;
+};
+
 struct ContactAccuracy {
   int substeps = kMinAutoSubsteps;
   double closingSpeed = 0;  ///< m/s, the largest over the pairs that can meet within the frame
 };
+/// What contactAccuracySubsteps() works in: keeps its size, so a frame allocates nothing once the
+/// first frames have grown it.
+struct ContactAccuracyScratch {
+  std::vector<std::uint64_t> touchingSurfaces;
+  std::vector<SurfaceMotion> motion;
+};
 ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
-                                        std::span<const TrianglePair> touching,
-                                        double shortestEdge);
+                                        std::span<const TrianglePair> touching, double shortestEdge,
+                                        ContactAccuracyScratch& scratch);
 
 /// The shortest rest length of any structural spring, scene units; infinity when there is none.
 double shortestEdge(const SceneTopology& topology);

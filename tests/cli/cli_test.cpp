@@ -183,15 +183,16 @@ TEST_F(CliTest, BadOptionValuesAreRefused) {
 }
 
 TEST_F(CliTest, TooFewExplicitSubstepsWarnsWithTheBound) {
-  const Result run =
-      runSoftbake("run --frames 1 --substeps 1 -q -o " + quoted((folder_ / "o").string()));
+  const Result run = runSoftbake("run --integrator explicit --frames 1 --substeps 1 -q -o " +
+                                 quoted((folder_ / "o").string()));
   EXPECT_EQ(run.exitCode, 0) << run.output;
   EXPECT_NE(run.output.find("stability bound"), std::string::npos) << run.output;
 }
 
 TEST_F(CliTest, TooFewSubstepsBlowsUpWithAClearErrorAndNoNaNInAnyFile) {
   const fs::path out = folder_ / "out";
-  const Result run = runSoftbake("run --frames 48 --substeps 1 -q -o " + quoted(out.string()));
+  const Result run = runSoftbake("run --integrator explicit --frames 48 --substeps 1 -q -o " +
+                                 quoted(out.string()));
   ASSERT_EQ(run.exitCode, 1) << run.output;
   EXPECT_NE(run.output.find("substeps"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("frame"), std::string::npos) << run.output;

@@ -31,6 +31,7 @@ TEST(Integrator, FreeFallHasTheSchemesKnownError) {
   material.pressure = 0;
   SceneSetup scene = test::ballScene(material, 2, 0.5f, {0, 10, 0}, true, false);
   scene.bodies[0].velocity = Vec3(1, 2, 0);
+  scene.settings.integrator = IntegratorKind::Explicit;
   Simulator simulator(buildSceneTopology(scene));
   const Vec3d start = test::centroid(simulator.state());
   const int frames = 24;

@@ -63,6 +63,7 @@ TEST(Substeps, ExplicitValueBelowTheBoundIsFlagged) {
 
 TEST(BlowUp, TooFewSubstepsStopWithAMessageNamingBodyAndFrame) {
   SceneSetup scene = test::ballScene(*findMaterialPreset("stiff"));
+  scene.settings.integrator = IntegratorKind::Explicit;
   const SceneTopology probe = buildSceneTopology(scene);
   scene.settings.substeps = std::max(1, chooseSubsteps(probe, 0).minimumStableSubsteps / 4);
   Simulator simulator(buildSceneTopology(scene));
@@ -78,12 +79,16 @@ TEST(BlowUp, TooFewSubstepsStopWithAMessageNamingBodyAndFrame) {
   for (const Vec3& p : simulator.state().position) (void)p;  // state stays inspectable
 }
 
-TEST(BlowUp, AutoSubstepsRunEveryPresetForTwoSecondsWithoutBlowingUp) {
-  for (const NamedMaterial& preset : materialPresets()) {
-    Simulator simulator(buildSceneTopology(test::ballScene(preset.material)));
-    for (int frame = 2; frame <= 48; ++frame)
-      ASSERT_NO_THROW(simulator.advanceToFrame(frame)) << preset.name;
-  }
+TEST(BlowUp, AutoSubstepsRunEveryPresetForTwoSecondsWithoutBlowingUpUnderEveryIntegrator) {
+  for (IntegratorKind integrator : kIntegratorKinds)
+    for (const NamedMaterial& preset : materialPresets()) {
+      SceneSetup scene = test::ballScene(preset.material);
+      scene.settings.integrator = integrator;
+      Simulator simulator(buildSceneTopology(scene));
+      for (int frame = 2; frame <= 48; ++frame)
+        ASSERT_NO_THROW(simulator.advanceToFrame(frame))
+            << preset.name << ", " << integratorName(integrator);
+    }
 }
 
 }  // namespace
