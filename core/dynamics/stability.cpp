@@ -98,8 +98,8 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   };
 
   // Surfaces already in contact: the speed of the fastest corner of a touching triangle pair, the
-  // measure kContactReachFraction was calibrated with (their relative speed would be up to twice
-  // that, and the response's velocity noise at contacts makes it so).
+  // measure kContactReachFraction was calibrated with (their relative speed can be up to twice
+  // that).
   ContactAccuracy choice;
   std::vector<std::uint64_t>& touchingSurfaces = scratch.touchingSurfaces;
   touchingSurfaces.clear();
