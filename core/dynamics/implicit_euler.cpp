@@ -38,7 +38,7 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       springBlock_(topology.springs.size()),
       springVelocity_(topology.springs.size(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
-      inverseDiagonal_(topology.particleCount(), Vec3::Zero()),
+      inverseDiagonal_(topology.particleCount(), Mat3::Zero()),
       deltaV_(topology.particleCount(), Vec3::Zero()),
       residual_(topology.particleCount(), Vec3::Zero()),
       preconditioned_(topology.particleCount(), Vec3::Zero()),
@@ -56,10 +56,10 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       const Index other = (ref & 1) ? spring.a : spring.b;
       // A pinned column: its Δv is zero, so it reads the always-zero entry past the particles.
       rowNeighbour_.push_back(topology.inverseMass[other] == 0 ? topology.particleCount() : other);
-      rowSpring_.push_back(ref >> 1);
     }
   }
   rowStart_.back() = Index(rowNeighbour_.size());
+  rowBlock_.resize(rowNeighbour_.size());
   for (Index b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
     bool pinned = false;
@@ -119,7 +119,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
                       }
                     });
 
-  // Per particle: b = h·f₀ + h²·K·v₀, and the Jacobi preconditioner.
+  // Per particle: b = h·f₀ + h²·K·v₀, and the block-Jacobi preconditioner.
   const Scalar* mass = topology.mass.data();
   const Scalar* inverseMass = topology.inverseMass.data();
   forEachParticle(topology.particleCount(), [&](Index i) {
@@ -129,7 +129,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       return;
     }
     Vec3 b = h * particleForce(topology, forces, i);
-    Vec3 diagonal = Vec3::Constant(mass[i]);
+    Mat3 diagonal = Mat3::Identity() * mass[i];
     for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
       const Index ref = topology.springRefs[r];
       const Index s = ref >> 1;
@@ -139,11 +139,12 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       else
         b += springVelocity_[s];
       const SpringBlock& block = springBlock_[s];
-      diagonal +=
-          block.along * block.axis.cwiseProduct(block.axis) + Vec3::Constant(block.isotropic);
+      rowBlock_[rowStart_[i] + (r - topology.springRowStart[i])] = block;
+      diagonal += block.along * block.axis * block.axis.transpose();
+      diagonal.diagonal().array() += block.isotropic;
     }
     rhs_[i] = b;
-    inverseDiagonal_[i] = diagonal.cwiseInverse();
+    inverseDiagonal_[i] = diagonal.inverse();
   });
 }
 
@@ -175,7 +176,7 @@ double ImplicitEuler::multiplyDirection(const SceneTopology& topology) {
                  const Vec3 in = direction_[i];
                  Vec3 sum = mass[i] * in;
                  for (Index r = rowStart_[i]; r < rowStart_[i + 1]; ++r)
-                   sum += springBlock_[rowSpring_[r]].times(in - direction_[rowNeighbour_[r]]);
+                   sum += rowBlock_[r].times(in - direction_[rowNeighbour_[r]]);
                  product_[i] = sum;
                  curvature += dot(in, sum);
                }
@@ -195,7 +196,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
     double rzChunk = 0, bb = 0;
     for (std::size_t i = begin; i < end; ++i) {
       residual_[i] = rhs_[i] - product_[i];
-      preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
+      preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
       direction_[i] = preconditioned_[i];
       rzChunk += dot(residual_[i], preconditioned_[i]);
       bb += dot(rhs_[i], rhs_[i]);
@@ -227,7 +228,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       for (std::size_t i = begin; i < end; ++i) {
         deltaV_[i] += alpha * direction_[i];
         residual_[i] -= alpha * product_[i];
-        preconditioned_[i] = inverseDiagonal_[i].cwiseProduct(residual_[i]);
+        preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
         rr += dot(residual_[i], residual_[i]);
         rzChunk += dot(residual_[i], preconditioned_[i]);
       }
