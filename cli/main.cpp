@@ -49,8 +49,9 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
   runApp
       ->add_option("--integrator", run.integrator,
-                   "explicit (the paper's Euler, the default), implicit (backward Euler) or xpbd "
-                   "(position-based, small steps); the last two are stable at any step")
+                   "implicit (backward Euler, the default), explicit (the paper's Euler, to "
+                   "reproduce its figures) or xpbd (position-based, small steps); implicit and xpbd "
+                   "are stable at any step")
       ->check(CLI::IsMember(softbake::integratorNames()));
   runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);

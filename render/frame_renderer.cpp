@@ -146,13 +146,16 @@ RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
 // ---- renderer --------------------------------------------------------------------------------
 
 struct FrameRenderer::Gl {
-  GLuint surfaceProgram = 0, groundProgram = 0;
+  GLuint surfaceProgram = 0, groundProgram = 0, shadowProgram = 0;
+  GLuint emptyVao = 0;  ///< core profile draws need a vertex array; the shadow has no attributes
   std::vector<MeshBuffers> bodies;
   MeshBuffers statics, sphere, ground;
   GLuint contactOffsets = 0;
   GLsizeiptr contactCapacity = 0;  ///< contacts the offset buffer holds
   GLuint multisampleFbo = 0, multisampleColor = 0, multisampleDepth = 0;
   GLuint resolveFbo = 0, resolveColor = 0, resolveDepth = 0;
+  /// The background and the ground without shadows, colour and depth, as every frame starts.
+  GLuint groundFbo = 0, groundColor = 0, groundDepth = 0;
   int samples = 0;
   // Per-frame scratch, kept to avoid allocating every frame.
   std::vector<Vec3f> normals;
@@ -169,8 +172,19 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
   Gl& gl = *gl_;
   gl.surfaceProgram = linkProgram(kSurfaceVertexShader, kSurfaceFragmentShader);
   gl.groundProgram = linkProgram(kGroundVertexShader, kGroundFragmentShader);
+  gl.shadowProgram = linkProgram(kShadowVertexShader, kShadowFragmentShader);
+  glGenVertexArrays(1, &gl.emptyVao);
   createMeshes();
   createFramebuffers();
+  // The camera and the planes are fixed for the sequence: the ground is drawn once, and each frame
+  // starts from a copy of it (the grid shader cost llvmpipe a third of every frame).
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.groundFbo);
+  glViewport(0, 0, options_.width, options_.height);
+  glClearColor(kBackground[0], kBackground[1], kBackground[2], 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  drawGround(lighting());
+  glBindVertexArray(0);
   checkGl("while setting up the renderer");
 }
 
@@ -266,6 +280,7 @@ void FrameRenderer::createFramebuffers() {
   makeFramebuffer(gl.resolveFbo, gl.resolveColor, gl.resolveDepth, 0);
   if (gl.samples > 1)
     makeFramebuffer(gl.multisampleFbo, gl.multisampleColor, gl.multisampleDepth, gl.samples);
+  makeFramebuffer(gl.groundFbo, gl.groundColor, gl.groundDepth, gl.samples > 1 ? gl.samples : 0);
 }
 
 FrameRenderer::~FrameRenderer() {
@@ -282,18 +297,19 @@ FrameRenderer::~FrameRenderer() {
   gl.sphere.destroy();
   gl.ground.destroy();
   glDeleteBuffers(1, &gl.contactOffsets);
-  const GLuint framebuffers[] = {gl.multisampleFbo, gl.resolveFbo};
-  glDeleteFramebuffers(2, framebuffers);
+  glDeleteVertexArrays(1, &gl.emptyVao);
+  const GLuint framebuffers[] = {gl.multisampleFbo, gl.resolveFbo, gl.groundFbo};
+  glDeleteFramebuffers(3, framebuffers);
   const GLuint renderbuffers[] = {gl.multisampleColor, gl.multisampleDepth, gl.resolveColor,
-                                  gl.resolveDepth};
-  glDeleteRenderbuffers(4, renderbuffers);
+                                  gl.resolveDepth,     gl.groundColor,      gl.groundDepth};
+  glDeleteRenderbuffers(6, renderbuffers);
   glDeleteProgram(gl.surfaceProgram);
   glDeleteProgram(gl.groundProgram);
+  glDeleteProgram(gl.shadowProgram);
 }
 
 std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   const SceneTopology& topology = *scene_.topology;
-  const Camera& camera = scene_.camera;
   if (!topology.bodies.empty()) {
     const Body& last = topology.bodies.back();
     if (frame.positions.size() < std::size_t(last.firstParticle) + last.particleCount)
@@ -302,28 +318,35 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   }
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
-  glBindFramebuffer(GL_FRAMEBUFFER, gl.samples > 1 ? gl.multisampleFbo : gl.resolveFbo);
+  const GLuint target = gl.samples > 1 ? gl.multisampleFbo : gl.resolveFbo;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.groundFbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
+  glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, target);
   glViewport(0, 0, w, h);
-  glClearColor(kBackground[0], kBackground[1], kBackground[2], 1);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);  // open meshes show their inside
 
+  const Lighting light = lighting();
+  const std::vector<float> shadows = uploadBodies(frame);
+  drawShadows(light, shadows);
+  glEnable(GL_DEPTH_TEST);
+  drawSurfaces(light);
+  drawContacts(frame);
+  glBindVertexArray(0);
+  return readImage(frame.number);
+}
+
+FrameRenderer::Lighting FrameRenderer::lighting() const {
+  const Camera& camera = scene_.camera;
   Lighting lighting;
-  lighting.viewProjection = viewProjection(camera, w, h);
+  lighting.viewProjection = viewProjection(camera, options_.width, options_.height);
   const Vec3f forward = (camera.target - camera.position).normalized();
   const Vec3f side = forward.cross(camera.up).normalized();
   const Vec3f up = side.cross(forward);
   // Key from above, left and behind the camera; fill from the right, low.
   lighting.key = (-forward * 0.6f + up * 1.0f - side * 0.5f).normalized();
   lighting.fill = (-forward * 0.8f + up * 0.1f + side * 0.9f).normalized();
-
-  const std::vector<float> shadows = uploadBodies(frame);
-  drawSurfaces(lighting);
-  drawContacts(frame);
-  drawGround(lighting, shadows);
-  glBindVertexArray(0);
-  return readImage(frame.number);
+  return lighting;
 }
 
 /// Bodies' positions and smooth normals for this frame; returns their blob shadows (centre and
@@ -431,8 +454,8 @@ void FrameRenderer::drawContacts(const Frame& frame) {
                           GLsizei(count));
 }
 
-/// The ground quad: grid, blob shadows, fade towards the horizon.
-void FrameRenderer::drawGround(const Lighting& lighting, const std::vector<float>& shadows) {
+/// The ground quad: grid and fade towards the horizon.
+void FrameRenderer::drawGround(const Lighting& lighting) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
   const Camera& camera = scene_.camera;
@@ -442,7 +465,6 @@ void FrameRenderer::drawGround(const Lighting& lighting, const std::vector<float
   const Vec3f u = perpendicular(normal), v = normal.cross(u);
   // Bold lines every power of ten below the scene's size, thin ones at a quarter of that.
   const float spacing = 0.25f * std::pow(10.0f, std::floor(std::log10(scene_.size)));
-  const float distance = (camera.position - camera.target).norm();
   glUseProgram(gl.groundProgram);
   uniform(gl.groundProgram, "uViewProjection", lighting.viewProjection);
   uniform(gl.groundProgram, "uOrigin", Vec3f(planePoint.point.cast<float>()));
@@ -452,15 +474,55 @@ void FrameRenderer::drawGround(const Lighting& lighting, const std::vector<float
   uniform(gl.groundProgram, "uEye", camera.position);
   uniform(gl.groundProgram, "uKey", lighting.key);
   uniform(gl.groundProgram, "uSpacing", spacing);
-  glUniform2f(glGetUniformLocation(gl.groundProgram, "uFade"), distance + 0.5f * scene_.size,
-              distance + 6 * scene_.size);
+  const Eigen::Vector2f fade = groundFade();
+  glUniform2f(glGetUniformLocation(gl.groundProgram, "uFade"), fade.x(), fade.y());
   uniform(gl.groundProgram, "uBackground", Vec3f(kBackground[0], kBackground[1], kBackground[2]));
-  uniform(gl.groundProgram, "uShadowCount", int(shadows.size() / 4));
-  if (!shadows.empty())
-    glUniform4fv(glGetUniformLocation(gl.groundProgram, "uShadows"), GLsizei(shadows.size() / 4),
-                 shadows.data());
   glBindVertexArray(gl.ground.vao);
   glDrawElements(GL_TRIANGLES, gl.ground.indexCount, GL_UNSIGNED_INT, nullptr);
+}
+
+/// Where the ground fades into the background: from the scene's far side to six sizes behind.
+Eigen::Vector2f FrameRenderer::groundFade() const {
+  const float distance = (scene_.camera.position - scene_.camera.target).norm();
+  return {distance + 0.5f * scene_.size, distance + 6 * scene_.size};
+}
+
+/// Each body's blob shadow multiplied into the ground copied in: a square around the point under
+/// the body, before the bodies are drawn, so no depth test is needed.
+void FrameRenderer::drawShadows(const Lighting& lighting, const std::vector<float>& shadows) {
+  Gl& gl = *gl_;
+  const SceneTopology& topology = *scene_.topology;
+  if (gl.ground.indexCount == 0 || shadows.empty()) return;
+  const PlaneCollider& plane = topology.planes.front();
+  const Vec3f normal = plane.normal.cast<float>().normalized();
+  const Vec3f point = plane.point.cast<float>();
+  const Vec3f u = perpendicular(normal), v = normal.cross(u);
+  const Eigen::Vector2f fade = groundFade();
+  glUseProgram(gl.shadowProgram);
+  uniform(gl.shadowProgram, "uViewProjection", lighting.viewProjection);
+  uniform(gl.shadowProgram, "uAxisU", u);
+  uniform(gl.shadowProgram, "uAxisV", v);
+  uniform(gl.shadowProgram, "uEye", scene_.camera.position);
+  glUniform2f(glGetUniformLocation(gl.shadowProgram, "uFade"), fade.x(), fade.y());
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_DST_COLOR, GL_ZERO);
+  glBindVertexArray(gl.emptyVao);
+  for (std::size_t s = 0; s + 4 <= shadows.size(); s += 4) {
+    const Vec3f center(shadows[s], shadows[s + 1], shadows[s + 2]);
+    const float radius = shadows[s + 3];
+    // A higher body casts a wider, fainter shadow.
+    const float height = std::max((center - point).dot(normal), 0.0f);
+    const float sigma = radius * 0.9f + 0.5f * std::max(height - radius, 0.0f);
+    if (!(sigma > 0)) continue;
+    uniform(gl.shadowProgram, "uCenter", Vec3f(center - normal * (center - point).dot(normal)));
+    uniform(gl.shadowProgram, "uSigma", sigma);
+    uniform(gl.shadowProgram, "uStrength",
+            0.6f * std::clamp(radius / std::max(height, radius), 0.0f, 1.0f));
+    uniform(gl.shadowProgram, "uExtent", 3 * sigma);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+  }
+  glDisable(GL_BLEND);
 }
 
 /// Resolves the multisampled image and reads it back, top row first.

@@ -98,7 +98,10 @@ class FrameRenderer {
   std::vector<float> uploadBodies(const Frame& frame);
   void drawSurfaces(const Lighting& lighting);
   void drawContacts(const Frame& frame);
-  void drawGround(const Lighting& lighting, const std::vector<float>& shadows);
+  void drawGround(const Lighting& lighting);
+  void drawShadows(const Lighting& lighting, const std::vector<float>& shadows);
+  Lighting lighting() const;
+  Eigen::Vector2f groundFade() const;
   std::vector<std::uint8_t> readImage(int frameNumber);
   RenderScene scene_;
   RenderOptions options_;

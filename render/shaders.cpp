@@ -59,8 +59,9 @@ void main() {
 }
 )";
 
-// A procedural grid (anti-aliased with fwidth), soft blob shadows under the bodies, and a fade to
-// the background towards the horizon.
+// A procedural grid (anti-aliased with fwidth) and a fade to the background towards the horizon.
+// The camera and the plane are fixed for a sequence, so this is drawn once per sequence; the blob
+// shadows are multiplied in per frame.
 const char* const kGroundFragmentShader = R"(#version 330 core
 in vec3 vPosition;
 uniform vec3 uOrigin;
@@ -72,8 +73,6 @@ uniform vec3 uKey;
 uniform float uSpacing;
 uniform vec2 uFade;
 uniform vec3 uBackground;
-uniform int uShadowCount;
-uniform vec4 uShadows[16];
 out vec4 outColor;
 float gridLine(vec2 uv) {
   vec2 d = abs(fract(uv - 0.5) - 0.5) / max(fwidth(uv), vec2(1e-6));
@@ -88,19 +87,45 @@ void main() {
                    0.8 * gridLine(uv / 4.0) * (1.0 - smoothstep(0.6, 1.6, density)));
   vec3 color = mix(vec3(0.50), vec3(0.30), line);
   color *= 0.55 + 0.45 * max(dot(uNormal, uKey), 0.0);
-  float light = 1.0;
-  for (int i = 0; i < uShadowCount; ++i) {
-    vec3 d = vPosition - uShadows[i].xyz;
-    float r = uShadows[i].w;
-    float height = max(-dot(d, uNormal), 0.0);
-    vec3 lateral = d + height * uNormal;
-    float sigma = r * 0.9 + 0.5 * max(height - r, 0.0);
-    float strength = 0.6 * clamp(r / max(height, r), 0.0, 1.0);
-    light *= 1.0 - strength * exp(-dot(lateral, lateral) / (sigma * sigma));
-  }
-  color = pow(clamp(color * light, 0.0, 1.0), vec3(1.0 / 2.2));
+  color = pow(clamp(color, 0.0, 1.0), vec3(1.0 / 2.2));
   float fade = smoothstep(uFade.x, uFade.y, length(vPosition - uEye));
   outColor = vec4(mix(color, uBackground, fade), 1.0);
+}
+)";
+
+// One body's blob shadow: a square on the ground plane around the point under the body, 3σ of its
+// Gaussian from the centre (past that the shadow changes no 8-bit value), drawn as a triangle
+// strip of four vertices without attributes.
+const char* const kShadowVertexShader = R"(#version 330 core
+uniform mat4 uViewProjection;
+uniform vec3 uCenter;
+uniform vec3 uAxisU;
+uniform vec3 uAxisV;
+uniform float uExtent;
+out vec3 vPosition;
+void main() {
+  vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1)) * 2.0 - 1.0;
+  vPosition = uCenter + uExtent * (corner.x * uAxisU + corner.y * uAxisV);
+  gl_Position = uViewProjection * vec4(vPosition, 1.0);
+}
+)";
+
+// The shadow's factor on the ground's colour, for multiplicative blending (DST_COLOR, ZERO). The
+// ground is gamma encoded, so the linear factor is encoded too: (c·L)^(1/2.2) =
+// c^(1/2.2)·L^(1/2.2). Where the ground fades into the background the shadow fades with it.
+const char* const kShadowFragmentShader = R"(#version 330 core
+in vec3 vPosition;
+uniform vec3 uCenter;
+uniform float uSigma;
+uniform float uStrength;
+uniform vec3 uEye;
+uniform vec2 uFade;
+out vec4 outColor;
+void main() {
+  vec3 lateral = vPosition - uCenter;
+  float light = 1.0 - uStrength * exp(-dot(lateral, lateral) / (uSigma * uSigma));
+  float fade = smoothstep(uFade.x, uFade.y, length(vPosition - uEye));
+  outColor = vec4(vec3(mix(pow(light, 1.0 / 2.2), 1.0, fade)), 1.0);
 }
 )";
 
