@@ -32,16 +32,16 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   if (integrator == IntegratorKind::Implicit) implicit_.emplace(*topology_);
   if (integrator == IntegratorKind::Xpbd) xpbd_.emplace(*topology_);
   if (integrator != IntegratorKind::Explicit) {
-    shortestEdge_ = shortestEdge(*topology_);
+    contactEdgeLength_ = contactEdgeLength(*topology_);
     substeps_.stableAtAnyStep = true;
     if (substeps_.automatic) chooseContactAccuracySubsteps();
   }
 }
 
 void Simulator::chooseContactAccuracySubsteps() {
-  const ContactAccuracy accuracy =
-      contactAccuracySubsteps(*topology_, state_.position, state_.velocity,
-                              detector_.candidatePairs(), shortestEdge_, contactAccuracyScratch_);
+  const ContactAccuracy accuracy = contactAccuracySubsteps(
+      *topology_, state_.position, state_.velocity, detector_.candidatePairs(), contactEdgeLength_,
+      contactAccuracyScratch_);
   substeps_.substeps = accuracy.substeps;
   substeps_.closingSpeed = accuracy.closingSpeed;
   // XPBD's springs soften at steps past the explicit bound (core/dynamics/xpbd.hpp).

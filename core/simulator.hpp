@@ -95,7 +95,7 @@ class Simulator {
   std::vector<Vec3> substepStart_;  ///< every particle's position at the start of the substep
   std::optional<ImplicitEuler> implicit_;  ///< set under the implicit integrator
   std::optional<Xpbd> xpbd_;               ///< set under the XPBD integrator
-  double shortestEdge_ = 0;  ///< for "auto" substeps of the integrators stable at any step
+  double contactEdgeLength_ = 0;  ///< for "auto" substeps of the integrators stable at any step
   SubstepChoice substeps_;
   ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;

@@ -87,7 +87,7 @@ double travel(const SurfaceMotion& motion, double gravitySpeed) {
 ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
-                                        std::span<const TrianglePair> touching, double shortestEdge,
+                                        std::span<const TrianglePair> touching, double edgeLength,
                                         ContactAccuracyScratch& scratch) {
   const double frameTime = 1.0 / topology.settings.fps;
   const double gravitySpeed = double(topology.settings.gravity.norm()) * frameTime;
@@ -146,7 +146,7 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
       choice.closingSpeed = std::max(choice.closingSpeed, closing);
     }
   }
-  const double reach = kContactReachFraction * (skin + shortestEdge);
+  const double reach = kContactReachFraction * (skin + edgeLength);
   if (!(reach > 0) || !std::isfinite(choice.closingSpeed)) {
     choice.substeps = kMaxAutoSubsteps;
     return choice;
@@ -156,14 +156,19 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   return choice;
 }
 
-double shortestEdge(const SceneTopology& topology) {
-  double shortest = std::numeric_limits<double>::infinity();
+double contactEdgeLength(const SceneTopology& topology) {
+  std::vector<double> lengths;
+  lengths.reserve(topology.triangles.size() * 3);
   for (const Triangle& t : topology.triangles)
     for (int k = 0; k < 3; ++k)
-      shortest = std::min(
-          shortest,
+      lengths.push_back(
           double((topology.restPosition[t[(k + 1) % 3]] - topology.restPosition[t[k]]).norm()));
-  return shortest;
+  if (lengths.empty()) return std::numeric_limits<double>::infinity();
+  // nth_element: linear in the number of edges, so setup stays linear in the scene's size.
+  const auto nth =
+      lengths.begin() + std::ptrdiff_t(double(lengths.size() - 1) * kShortEdgeQuantile);
+  std::nth_element(lengths.begin(), nth, lengths.end());
+  return *nth;
 }
 
 }  // namespace softbake

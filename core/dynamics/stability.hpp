@@ -51,26 +51,32 @@ SubstepChoice chooseSubsteps(const SceneTopology& topology, int requested);
 inline constexpr int kMinAutoSubsteps = 4;
 inline constexpr int kMaxAutoSubsteps = 64;
 
-/// The part of (skin + shortest edge) two surfaces may close on each other in one substep of an
-/// integrator that is stable at any step.
-/// Measured: at a tenth, bodies thrown at each other and dropped on a static sphere stay free of
-/// intersecting triangles (tests/core/collision_test); at a half they did not.
+/// The part of (skin + short edge, contactEdgeLength()) two surfaces may close on each other in one
+/// substep of an integrator that is stable at any step. Measured: at a tenth, bodies thrown at each
+/// other and dropped on a static sphere stay free of intersecting triangles
+/// (tests/core/collision_test); at a half they did not.
 inline constexpr double kContactReachFraction = 0.1;
+
+/// The contact reach uses this quantile of the rest edge lengths, not the shortest edge: the few
+/// sliver and tiny triangles of an imported CAD part or scan (a twentieth of its edges) would
+/// otherwise set the step for the whole scene. On a uniform mesh, such as an icosphere, it is
+/// within a few percent of the shortest edge.
+inline constexpr double kShortEdgeQuantile = 0.05;
 
 /// "auto" substeps of the implicit and XPBD integrators, which are stable at any step, so the
 /// count is set by contact accuracy: over one substep, two collision surfaces that can meet within
-/// the frame close on each other by at most kContactReachFraction of the skin plus the shortest
-/// rest edge, so the segment tests of §2.3 see each crossing from nearby. Only closing speed
-/// counts: a body's own translation does not, so a body flying alone, or bodies falling side by
-/// side, take few substeps. A pair's closing speed is the difference of the two surfaces' mean
-/// velocities (mass-weighted) plus each one's largest deviation from its mean (deformation and
-/// spin), or the speed of the faster surface's fastest vertex where that is less (the measure
-/// kContactReachFraction was calibrated with), plus what gravity adds over the frame. Surfaces
-/// already in contact (`touching`: the broad phase's triangle pairs of the latest substep) count
-/// with the speed of the fastest corner of a touching triangle pair plus gravity's. Any other pair
-/// counts when its bounding boxes, each grown by how far it can travel in the frame plus the skin,
-/// overlap; a self-colliding body counts against itself. Ground planes are not surfaces here: their
-/// contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps to
+/// the frame close on each other by at most kContactReachFraction of the skin plus the short
+/// rest edge of contactEdgeLength(), so the segment tests of §2.3 see each crossing from nearby.
+/// Only closing speed counts: a body's own translation does not, so a body flying alone, or bodies
+/// falling side by side, take few substeps. A pair's closing speed is the difference of the two
+/// surfaces' mean velocities (mass-weighted) plus each one's largest deviation from its mean
+/// (deformation and spin), or the speed of the faster surface's fastest vertex where that is less
+/// (the measure kContactReachFraction was calibrated with), plus what gravity adds over the frame.
+/// Surfaces already in contact (`touching`: the broad phase's triangle pairs of the latest substep)
+/// count with the speed of the fastest corner of a touching triangle pair plus gravity's. Any other
+/// pair counts when its bounding boxes, each grown by how far it can travel in the frame plus the
+/// skin, overlap; a self-colliding body counts against itself. Ground planes are not surfaces here:
+/// their contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps to
 /// kMaxAutoSubsteps.
 /// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
 struct SurfaceMotion {
@@ -94,10 +100,11 @@ struct ContactAccuracyScratch {
 ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
-                                        std::span<const TrianglePair> touching, double shortestEdge,
+                                        std::span<const TrianglePair> touching, double edgeLength,
                                         ContactAccuracyScratch& scratch);
 
-/// The shortest rest length of any structural spring, scene units; infinity when there is none.
-double shortestEdge(const SceneTopology& topology);
+/// The rest edge length that sets the contact reach: the kShortEdgeQuantile quantile of the
+/// triangles' rest edges, scene units; infinity when there is none.
+double contactEdgeLength(const SceneTopology& topology);
 
 }  // namespace softbake
