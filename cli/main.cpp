@@ -48,10 +48,11 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
       ->check(CLI::Range(1, 10000000));
   runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
   runApp
-      ->add_option("--integrator", run.integrator,
-                   "implicit (backward Euler, the default), explicit (the paper's Euler, to "
-                   "reproduce its figures) or xpbd (position-based, small steps); implicit and xpbd "
-                   "are stable at any step")
+      ->add_option(
+          "--integrator", run.integrator,
+          "implicit (backward Euler, the default), explicit (the paper's Euler, to "
+          "reproduce its figures) or xpbd (position-based, small steps); implicit and xpbd "
+          "are stable at any step")
       ->check(CLI::IsMember(softbake::integratorNames()));
   runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
       ->check(checkSubsteps);

@@ -75,8 +75,8 @@ void Simulator::step(int frame) {
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
     detector_.detect(topology, {substepStart_, state_.position}, &clock);
-    const CollisionResponseStats responses = respondToCollisions(
-        topology, detector_, response, state_, contacts_, Scalar(substeps_.timeStep), edgePushes_);
+    const CollisionResponseStats responses =
+        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();

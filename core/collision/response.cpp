@@ -18,7 +18,6 @@ struct ResponseScene {
   const CollisionGeometry& geometry = topology.collision;
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
-  const Scalar timeStep;       ///< of the substep, seconds
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
 };
 
@@ -227,8 +226,9 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
     const Index surfaceB = geometry.triangleSurface[edge.triangle];
     if (!geometry.surfaceClosed[surfaceB]) continue;
     // The end of the edge behind the face of a closed surface is inside it: back out through
-    // the face's plane, lifted by the skin. Depth is measured now, after the responses before
-    // this one, so an end already pushed out by another contact is left alone.
+    // the face's plane, lifted by the skin. Depth is measured on the positions as the pass found
+    // them (after the particle responses and the earlier passes), so an end that an earlier pass
+    // pushed out is left alone.
     const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
     const Index ends[2] = {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]};
     StruckPoint struck;
@@ -287,8 +287,8 @@ void EdgePushes::apply(SimulationState& state) {
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
-                                           Scalar timeStep, EdgePushes& edgePushes) {
-  const ResponseScene scene{topology, state, topology.collision, topology.settings.skin, timeStep};
+                                           EdgePushes& edgePushes) {
+  const ResponseScene scene{topology, state};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

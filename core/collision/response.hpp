@@ -100,6 +100,6 @@ class EdgePushes {
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
-                                           Scalar timeStep, EdgePushes& edgePushes);
+                                           EdgePushes& edgePushes);
 
 }  // namespace softbake

@@ -122,23 +122,22 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   // Surfaces not in contact yet: how fast they can close, if they can meet within the frame.
   std::vector<SurfaceMotion>& motion = scratch.motion;
   motion.clear();
-  for (std::size_t s = 0; s < geometry.surfaces.size(); ++s)
+  for (std::size_t s = 0; s < geometry.surfaces.size(); ++s) {
     motion.push_back(s < topology.bodies.size()
                          ? softSurfaceMotion(topology, topology.bodies[s], positions, velocities)
                          : staticSurfaceMotion(geometry, geometry.surfaces[s]));
+    // Grown by how far the surface can travel in the frame, plus the skin.
+    const Scalar reach = Scalar(travel(motion.back(), gravitySpeed) * frameTime + skin);
+    motion.back().box.min().array() -= reach;
+    motion.back().box.max().array() += reach;
+  }
   for (std::size_t a = 0; a < motion.size(); ++a) {
     if (!motion[a].moving) continue;
     if (geometry.surfaces[a].selfCollision && !inContact(a, a))
       choice.closingSpeed = std::max(choice.closingSpeed, 2 * motion[a].deviation + gravitySpeed);
     for (std::size_t b = 0; b < motion.size(); ++b) {
       if (b == a || (motion[b].moving && b < a) || inContact(a, b)) continue;  // each pair once
-      const double reachA = travel(motion[a], gravitySpeed) * frameTime + skin;
-      const double reachB = travel(motion[b], gravitySpeed) * frameTime + skin;
-      const Vec3 lowA = motion[a].box.min().array() - Scalar(reachA);
-      const Vec3 highA = motion[a].box.max().array() + Scalar(reachA);
-      const Vec3 lowB = motion[b].box.min().array() - Scalar(reachB);
-      const Vec3 highB = motion[b].box.max().array() + Scalar(reachB);
-      if ((highA.array() < lowB.array()).any() || (highB.array() < lowA.array()).any()) continue;
+      if (!motion[a].box.intersects(motion[b].box)) continue;
       const double closing = std::min((motion[a].meanVelocity - motion[b].meanVelocity).norm() +
                                           motion[a].deviation + motion[b].deviation,
                                       std::max(motion[a].fastest, motion[b].fastest)) +

@@ -80,6 +80,7 @@ inline constexpr double kShortEdgeQuantile = 0.05;
 /// kMaxAutoSubsteps.
 /// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
 struct SurfaceMotion {
+  /// Where the surface can be within the frame: its bounds grown by its travel and the skin.
   Box3 box;
   Vec3d meanVelocity = Vec3d::Zero();
   double deviation = 0;  ///< the largest |v − mean| over its vertices

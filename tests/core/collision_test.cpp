@@ -59,8 +59,7 @@ std::vector<Contact> collideOnce(test::StagedScene& scene, const Vec3& end, cons
   detector.detect(scene.topology, {scene.substepStart, scene.state.position});
   std::vector<Contact> contacts;
   EdgePushes edgePushes(scene.topology.particleCount());
-  respondToCollisions(scene.topology, detector, mode, scene.state, contacts, Scalar(1.0 / 240),
-                      edgePushes);
+  respondToCollisions(scene.topology, detector, mode, scene.state, contacts, edgePushes);
   return contacts;
 }
 

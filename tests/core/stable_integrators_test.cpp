@@ -190,12 +190,12 @@ void addSlivers(TriangleMesh& mesh, std::size_t every) {
   const std::size_t original = mesh.triangles.size();
   for (std::size_t k = 0; k < original; k += every) {
     const auto [a, b, c] = mesh.triangles[k];
-    const auto across = std::find_if(mesh.triangles.begin(), mesh.triangles.end(),
-                                     [&](const Triangle& t) {
-                                       for (int e = 0; e < 3; ++e)
-                                         if (t[e] == b && t[(e + 1) % 3] == a) return true;
-                                       return false;
-                                     });
+    const auto across =
+        std::find_if(mesh.triangles.begin(), mesh.triangles.end(), [&](const Triangle& t) {
+          for (int e = 0; e < 3; ++e)
+            if (t[e] == b && t[(e + 1) % 3] == a) return true;
+          return false;
+        });
     if (across == mesh.triangles.end()) continue;
     Triangle neighbour = *across;
     while (neighbour[0] != b) neighbour = {neighbour[1], neighbour[2], neighbour[0]};
