@@ -88,6 +88,8 @@ class Simulator {
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
   void chooseContactAccuracySubsteps();
+  /// Holds, for the implicit step about to run, the particles the plane response left on a plane.
+  void holdPlaneContacts(Scalar dt);
 
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
@@ -102,6 +104,9 @@ class Simulator {
   CollisionDetector detector_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
+  /// Per particle, the plane it rests on (kNoPlane): held by the next implicit step. Like the
+  /// implicit integrator's warm start, it carries over from one substep to the next.
+  std::vector<std::int32_t> touchedPlane_;
   bool collides_ = false;
   std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;

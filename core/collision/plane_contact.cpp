@@ -38,17 +38,23 @@ bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, 
 }  // namespace
 
 std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const Vec3> substepStart,
-                                 SimulationState& state, bool respond) {
+                                 SimulationState& state, bool respond,
+                                 std::span<std::int32_t> touchedPlane) {
   if (topology.planes.empty()) return 0;
+  const bool record = !touchedPlane.empty();
   const Scalar skin = topology.settings.skin;
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, state.particleCount(), kParticleGrain), std::size_t(0),
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t moved) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          if (record) touchedPlane[i] = kNoPlane;
           if (topology.inverseMass[i] == 0) continue;
-          for (const PlaneCollider& plane : topology.planes)
-            moved += respondToPlane(plane, skin, substepStart[i], state.position[i],
-                                    state.velocity[i], respond);
+          for (std::size_t p = 0; p < topology.planes.size(); ++p) {
+            const bool touched = respondToPlane(topology.planes[p], skin, substepStart[i],
+                                                state.position[i], state.velocity[i], respond);
+            moved += touched;
+            if (record && touched && respond) touchedPlane[i] = std::int32_t(p);
+          }
         }
         return moved;
       },

@@ -2,6 +2,9 @@
 /// Contact with static infinite planes (the ground): the paper's case-1 response (§2.4) for a
 /// surface whose normal is the same everywhere.
 
+#include <cstdint>
+#include <span>
+
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -11,8 +14,13 @@ namespace softbake {
 /// closer than the skin: moves it to where its segment met the plane (or projects it), lifted by
 /// the skin along the normal; reflects the normal velocity with the plane's restitution and slows
 /// the tangential velocity by Coulomb friction. Returns the number of particles in contact. With
-/// `respond` false (detection only, the paper's figure 5b) nothing is moved.
+/// `respond` false (detection only, the paper's figure 5b) nothing is moved. When `touchedPlane`
+/// is given (one entry per particle), it receives the index of the plane each particle was moved
+/// onto, or kNoPlane: the contacts the implicit integrator holds during the next step.
 std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const Vec3> substepStart,
-                                 SimulationState& state, bool respond = true);
+                                 SimulationState& state, bool respond = true,
+                                 std::span<std::int32_t> touchedPlane = {});
+
+inline constexpr std::int32_t kNoPlane = -1;
 
 }  // namespace softbake

@@ -44,7 +44,13 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       preconditioned_(topology.particleCount(), Vec3::Zero()),
       direction_(topology.particleCount(), Vec3::Zero()),
       product_(topology.particleCount(), Vec3::Zero()),
-      chunkSum_((topology.particleCount() + kChunk - 1) / kChunk) {
+      chunkSum_((topology.particleCount() + kChunk - 1) / kChunk),
+      holdNormal_(topology.particleCount(), Vec3::Zero()),
+      holdSpeed_(topology.particleCount(), 0),
+      holdFriction_(topology.particleCount(), 0),
+      holdResidual_(topology.particleCount(), 0),
+      bodyHeld_(topology.bodies.size(), 0) {
+  held_.reserve(topology.particleCount());
   deltaV_.push_back(Vec3::Zero());  // the zero entry pinned neighbours read
   direction_.push_back(Vec3::Zero());
   for (Index i = 0; i < topology.particleCount(); ++i) {
@@ -69,11 +75,30 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
   }
 }
 
+void ImplicitEuler::hold(Index particle, const Vec3& normal, Scalar normalSpeed, Scalar friction) {
+  if (holdNormal_[particle] == Vec3::Zero()) held_.push_back(particle);
+  holdNormal_[particle] = normal;
+  holdSpeed_[particle] = normalSpeed;
+  holdFriction_[particle] = friction;
+}
+
+void ImplicitEuler::releaseHolds() {
+  for (Index i : held_) {
+    holdNormal_[i].setZero();
+    holdResidual_[i] = 0;
+  }
+  held_.clear();
+}
+
 void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
   // Internal forces cancel within a body, in b and in A·Δv alike, so the exact solution changes a
   // free body's momentum by Σ b (its external impulse) alone. CG stops at a residual whose sum is
-  // not zero; the body's share of it, spread as one velocity, is removed.
+  // not zero; the body's share of it, spread as one velocity, is removed. A body with held
+  // particles also takes the surface's impulses, which the residual's sum holds: left alone.
+  std::fill(bodyHeld_.begin(), bodyHeld_.end(), 0);
+  for (Index i : held_) bodyHeld_[topology.particleBody[i]] = 1;
   tbb::parallel_for(std::size_t(0), freeBodies_.size(), [&](std::size_t k) {
+    if (bodyHeld_[freeBodies_[k]]) return;
     const Body& body = topology.bodies[freeBodies_[k]];
     const Index end = body.firstParticle + body.particleCount;
     Vec3d excess = Vec3d::Zero();
@@ -188,25 +213,32 @@ double ImplicitEuler::multiplyDirection(const SceneTopology& topology) {
 void ImplicitEuler::solve(const SceneTopology& topology) {
   // Preconditioned CG (Shewchuk 1994, B3), warm-started from the previous step's Δv: successive
   // steps change velocity alike, so the first residual is already small. Pinned entries stay 0.
+  // Held particles start, and stay, with their prescribed normal part (modified PCG, Baraff &
+  // Witkin §5.3): the residual, its preconditioned form and so every search direction are
+  // filtered, and the filtered-out normal part of the residual is kept as the surface's impulse.
   const std::size_t n = topology.particleCount();
+  for (Index i : held_) deltaV_[i] = filtered(i, deltaV_[i]) + holdSpeed_[i] * holdNormal_[i];
   std::swap(direction_, deltaV_);  // the product of the warm start, computed into product_
   multiplyDirection(topology);
   std::swap(direction_, deltaV_);
   auto [rz, rhsSquared] = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
     double rzChunk = 0, bb = 0;
     for (std::size_t i = begin; i < end; ++i) {
-      residual_[i] = rhs_[i] - product_[i];
-      preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
+      const Vec3 residual = rhs_[i] - product_[i];
+      holdResidual_[i] = holdNormal_[i].dot(residual);
+      residual_[i] = residual - holdResidual_[i] * holdNormal_[i];
+      preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
       direction_[i] = preconditioned_[i];
       rzChunk += dot(residual_[i], preconditioned_[i]);
-      bb += dot(rhs_[i], rhs_[i]);
+      const Vec3 rhs = filtered(Index(i), rhs_[i]);
+      bb += dot(rhs, rhs);
     }
     return std::pair<double, double>{rzChunk, bb};
   });
   const double rhsNorm = std::sqrt(rhsSquared);
   stats_ = {};
   if (rhsNorm == 0) {
-    forEachParticle(n, [&](Index i) { deltaV_[i].setZero(); });
+    forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
     return;
   }
   const double tolerance = kTolerance * rhsNorm;
@@ -227,8 +259,10 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       double rr = 0, rzChunk = 0;
       for (std::size_t i = begin; i < end; ++i) {
         deltaV_[i] += alpha * direction_[i];
-        residual_[i] -= alpha * product_[i];
-        preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
+        const Scalar normalPart = holdNormal_[i].dot(product_[i]);
+        holdResidual_[i] -= alpha * normalPart;
+        residual_[i] -= alpha * (product_[i] - normalPart * holdNormal_[i]);
+        preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
         rr += dot(residual_[i], residual_[i]);
         rzChunk += dot(residual_[i], preconditioned_[i]);
       }
@@ -246,8 +280,22 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
 bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                          SimulationState& state, std::span<Vec3> substepStart) {
   assemble(topology, forces, dt, state);
+  // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
+  for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);
   restoreMomentum(topology);
+  // Coulomb friction at held particles, from the surface's impulse on each.
+  for (Index i : held_) {
+    const Scalar impulse = holdImpulse(i);
+    if (!(impulse > 0)) continue;
+    const Vec3& normal = holdNormal_[i];
+    const Vec3 v = state.velocity[i] + deltaV_[i];
+    const Vec3 tangential = v - normal.dot(v) * normal;
+    const Scalar tangentialSpeed = tangential.norm();
+    const Scalar slowdown = holdFriction_[i] * impulse * topology.inverseMass[i];
+    deltaV_[i] -=
+        tangentialSpeed > slowdown ? (slowdown / tangentialSpeed) * tangential : tangential;
+  }
   const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
   const Scalar* inverseMass = topology.inverseMass.data();
   std::atomic<bool> runaway{false};

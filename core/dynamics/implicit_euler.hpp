@@ -27,6 +27,16 @@
 /// the product with its curvature dot, the update of Δv and the residual with both residual dots,
 /// and the new search direction. CG is preconditioned by the inverse 3×3 diagonal blocks.
 ///
+/// Particles resting on a static surface are held by the same filter along the surface's normal
+/// alone (§5.3 and §6): their Δv has a prescribed normal part, the one that leaves them at the
+/// surface after the step, and the solve moves their neighbours with them. Projected after the
+/// step instead, a resting particle moves by up to v·h while its neighbours stay; with springs
+/// stiffer than the step (k·h²/m > 1) that stores more energy in them than the particle's own
+/// kinetic energy, which the response was meant to remove. The filter removes the normal part of
+/// the residual at a held particle, and what it removed is the surface's impulse on the particle:
+/// Coulomb friction slows the tangential velocity by μ times that impulse, and a particle whose
+/// impulse pulls it towards the surface is let go at the next step.
+///
 /// CG stops at a tolerance, and its residual's sum would change a body's momentum; that sum is
 /// removed per body (restoreMomentum), so internal forces conserve momentum to rounding.
 ///
@@ -74,6 +84,17 @@ class ImplicitEuler {
 
   const ImplicitSolveStats& lastSolve() const { return stats_; }
 
+  /// Holds `particle` on a static surface during the next step: its velocity along the unit
+  /// `normal` becomes `normalSpeed`, and `friction` (Coulomb) slows its tangential velocity by
+  /// the surface's impulse. A hold lasts until releaseHolds().
+  void hold(Index particle, const Vec3& normal, Scalar normalSpeed, Scalar friction);
+  /// After step(): the impulse along its normal (N·s) the surface gave a particle held during it;
+  /// negative when the hold kept it from leaving.
+  Scalar holdImpulse(Index particle) const { return -holdResidual_[particle]; }
+  /// The particles held during the latest step, in the order they were held.
+  const std::vector<Index>& heldParticles() const { return held_; }
+  void releaseHolds();
+
  private:
   /// S of one spring: α·d̂d̂ᵀ + β·I.
   struct SpringBlock {
@@ -91,8 +112,14 @@ class ImplicitEuler {
   template <class Chunk>
   std::pair<double, double> sumOverChunks(std::size_t count, const Chunk& chunk);
   void solve(const SceneTopology& topology);
-  /// Makes each body without pins change momentum by exactly its external impulse.
+  /// Makes each body without pins or held particles change momentum by exactly its external
+  /// impulse.
   void restoreMomentum(const SceneTopology& topology);
+  /// x without its part along the hold normal of particle i (x itself when i is not held).
+  Vec3 filtered(Index i, const Vec3& x) const {
+    const Vec3& n = holdNormal_[i];
+    return x - n.dot(x) * n;
+  }
 
   std::vector<Index> freeBodies_;      ///< bodies without pinned particles
   std::vector<Index> rowStart_;        ///< per particle, its range in rowNeighbour_/rowBlock_
@@ -108,6 +135,12 @@ class ImplicitEuler {
   /// deltaV_ and direction_, the product's inputs, have one more entry than particles, always 0.
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
   std::vector<std::pair<double, double>> chunkSum_;
+  /// Holds of the next step, per particle: the unit normal (zero when not held), the velocity
+  /// along it, the friction coefficient; then the normal part of the residual during the solve.
+  std::vector<Vec3> holdNormal_;
+  std::vector<Scalar> holdSpeed_, holdFriction_, holdResidual_;
+  std::vector<Index> held_;     ///< particles with a hold, reserved for all of them
+  std::vector<char> bodyHeld_;  ///< per body: some particle was held this step
   ImplicitSolveStats stats_;
 };
 

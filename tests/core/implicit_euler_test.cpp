@@ -31,5 +31,41 @@ TEST(ImplicitEuler, TheSolverConvergesToItsTolerance) {
   }
 }
 
+/// A pair hanging from a held particle: gravity pulls both down, the hold keeps the top one's
+/// velocity along the normal at what it prescribes, the spring carries the lower one, and the
+/// surface's impulse on the held particle is what holds the pair up (both weights) for the step.
+TEST(ImplicitEuler, AHeldParticleMovesAlongItsNormalAtThePrescribedSpeed) {
+  test::StagedScene pair = test::springPair(/*stiffness=*/2000, /*damping=*/5, /*mass=*/1, 1.0f);
+  pair.topology.settings.gravity = Vec3(0, -10, 0);
+  pair.topology.restPosition = {Vec3(0, 1, 0), Vec3(0, 0, 0)};  // hanging straight down
+  pair.state = initialState(pair.topology);
+  pair.state.velocity[0] = Vec3(0.5f, -3, 0);  // sliding, and falling onto the surface
+  ImplicitEuler solver(pair.topology);
+  const Scalar dt = 0.01f;
+  solver.hold(0, Vec3(0, 1, 0), /*normalSpeed=*/0.25f, /*friction=*/0);
+  computeSpringForces(pair.topology, pair.state, pair.forces);
+  ASSERT_TRUE(solver.step(pair.topology, pair.forces, dt, pair.state, pair.substepStart));
+  EXPECT_NEAR(pair.state.velocity[0].y(), 0.25f, 1e-6f) << "the prescribed normal speed";
+  EXPECT_NEAR(pair.state.velocity[0].x(), 0.5f, 1e-4f) << "no friction: the slide goes on";
+  EXPECT_LT(pair.state.velocity[1].y(), 0) << "the free particle falls";
+  // The impulse stopped the held particle's 3 m/s fall, lifted it at 0.25 m/s, bore its weight,
+  // and took what the spring pulled down with: more than its own momentum change alone.
+  EXPECT_GT(solver.holdImpulse(0), 1 * (3 + 0.25) + 10 * dt);
+  ASSERT_EQ(solver.heldParticles().size(), 1u);
+
+  // Friction takes μ times the impulse from the slide; released, the particle falls freely.
+  pair.state = initialState(pair.topology);
+  pair.state.velocity[0] = Vec3(0.5f, -3, 0);
+  solver.releaseHolds();
+  solver.hold(0, Vec3(0, 1, 0), 0, /*friction=*/0.01f);
+  computeSpringForces(pair.topology, pair.state, pair.forces);
+  ASSERT_TRUE(solver.step(pair.topology, pair.forces, dt, pair.state, pair.substepStart));
+  const Scalar slowdown = 0.01f * solver.holdImpulse(0);
+  EXPECT_NEAR(pair.state.velocity[0].x(), 0.5f - slowdown, 1e-4f);
+  solver.releaseHolds();
+  EXPECT_TRUE(solver.heldParticles().empty());
+  EXPECT_EQ(solver.holdImpulse(0), 0);
+}
+
 }  // namespace
 }  // namespace softbake
