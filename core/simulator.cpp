@@ -16,7 +16,6 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
       substeps_(chooseSubsteps(*topology_, topology_->settings.substeps)),
       detector_(topology_->settings.collisions),
       edgePushes_(topology_->particleCount()) {
-  if (!topology_->planes.empty()) touchedPlane_.assign(topology_->particleCount(), kNoPlane);
   if (state_.position.size() != topology_->particleCount() ||
       state_.velocity.size() != topology_->particleCount())
     throw Error(cat("a simulation state of ", state_.position.size(), " positions and ",
@@ -30,7 +29,10 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   }
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
   const IntegratorKind integrator = topology_->settings.integrator;
-  if (integrator == IntegratorKind::Implicit) implicit_.emplace(*topology_);
+  if (integrator == IntegratorKind::Implicit) {
+    implicit_.emplace(*topology_);
+    holds_.emplace(*topology_);
+  }
   if (integrator == IntegratorKind::Xpbd) xpbd_.emplace(*topology_);
   if (integrator != IntegratorKind::Explicit) {
     contactEdgeLength_ = contactEdgeLength(*topology_);
@@ -68,7 +70,7 @@ void Simulator::step(int frame) {
     clock.lap(Stage::Forces);
   }
   const Scalar dt = Scalar(substeps_.timeStep);
-  if (implicit_) holdPlaneContacts(dt);
+  if (implicit_) holds_->holdFor(*implicit_, state_, dt);
   const bool finite = implicit_ ? implicit_->step(topology, forces_, dt, state_, substepStart_)
                       : xpbd_   ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
                                 : integrate(topology, forces_, dt, state_, substepStart_);
@@ -86,26 +88,11 @@ void Simulator::step(int frame) {
     stats_.responses.cornerResponses += responses.cornerResponses;
     stats_.responses.edgePushes += responses.edgePushes;
   }
-  stats_.planeContacts += resolvePlaneContacts(topology, substepStart_, state_,
-                                               response != ResponseMode::None, touchedPlane_);
-  if (implicit_)
-    for (Index i : implicit_->heldParticles())
-      if (!(implicit_->holdImpulse(i) > 0)) touchedPlane_[i] = kNoPlane;  // it was leaving
+  stats_.planeContacts +=
+      resolvePlaneContacts(topology, substepStart_, state_, response != ResponseMode::None,
+                           holds_ ? holds_->touchedPlane() : std::span<std::int32_t>());
+  if (holds_) holds_->update(*implicit_);
   clock.lap(Stage::Planes);
-}
-
-void Simulator::holdPlaneContacts(Scalar dt) {
-  implicit_->releaseHolds();
-  if (touchedPlane_.empty()) return;
-  const SceneTopology& topology = *topology_;
-  const Scalar skin = topology.settings.skin;
-  for (Index i = 0; i < topology.particleCount(); ++i) {
-    if (touchedPlane_[i] == kNoPlane) continue;
-    const PlaneCollider& plane = topology.planes[touchedPlane_[i]];
-    // The normal speed that ends the step at the skin, where the plane response left it.
-    const Scalar distance = plane.normal.dot(state_.position[i] - plane.point);
-    implicit_->hold(i, plane.normal, (skin - distance) / dt, plane.friction);
-  }
 }
 
 void Simulator::beginFrame() {

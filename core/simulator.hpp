@@ -20,6 +20,7 @@
 #include "core/collision/contact.hpp"
 #include "core/collision/detection.hpp"
 #include "core/collision/response.hpp"
+#include "core/dynamics/contact_holds.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/implicit_euler.hpp"
 #include "core/dynamics/stability.hpp"
@@ -88,8 +89,6 @@ class Simulator {
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
   void chooseContactAccuracySubsteps();
-  /// Holds, for the implicit step about to run, the particles the plane response left on a plane.
-  void holdPlaneContacts(Scalar dt);
 
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
@@ -104,9 +103,9 @@ class Simulator {
   CollisionDetector detector_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
-  /// Per particle, the plane it rests on (kNoPlane): held by the next implicit step. Like the
-  /// implicit integrator's warm start, it carries over from one substep to the next.
-  std::vector<std::int32_t> touchedPlane_;
+  /// Contacts the next implicit step holds. Like the implicit integrator's warm start, they carry
+  /// over from one substep to the next.
+  std::optional<ContactHolds> holds_;
   bool collides_ = false;
   std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;

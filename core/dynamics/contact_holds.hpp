@@ -1,0 +1,48 @@
+#pragma once
+/// The plane contacts the implicit integrator carries from one substep into the next (Baraff &
+/// Witkin, "Large Steps in Cloth Simulation", §5.3 and §6).
+///
+/// The plane pass moves a particle that crossed a plane back onto it. After a step larger than the
+/// springs' own time scale (k·h²/m > 1) that move, made while the particle's neighbours stay where
+/// the step left them, stores more energy in the springs than the particle's kinetic energy, which
+/// the response meant to remove: a ball settling on the ground gained energy. So a particle that
+/// the plane pass left on a plane is held there by the next step's solve instead: its velocity
+/// along the plane's normal is prescribed (what ends the step at the skin), and the solve moves the
+/// rest of its body with it. A hold whose plane pulled the particle towards it lets go at the next
+/// step.
+///
+/// Holding soft–soft contacts the same way was tried: the struck triangle moves in the same solve,
+/// which a one-sided hold cannot see, so held particles crossed again every substep and figure 7's
+/// intersecting pairs grew (bench/results/contacts.md).
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/dynamics/implicit_euler.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
+
+namespace softbake {
+
+class ContactHolds {
+ public:
+  explicit ContactHolds(const SceneTopology& topology);
+
+  /// Per particle, the plane the plane pass left it on (kNoPlane): what resolvePlaneContacts
+  /// records into. Empty when the scene has no planes.
+  std::span<std::int32_t> touchedPlane() { return touchedPlane_; }
+
+  /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`.
+  void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt) const;
+
+  /// After the step and its plane pass: lets go of the particles the plane pulled on, unless the
+  /// plane pass caught them again.
+  void update(const ImplicitEuler& solver);
+
+ private:
+  const SceneTopology& topology_;
+  std::vector<std::int32_t> touchedPlane_;
+};
+
+}  // namespace softbake
