@@ -16,6 +16,7 @@ packages=(
   zlib1g-dev                           # render: PNG deflate
   libcli11-dev                         # cli
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+  libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
 )
 missing=()

@@ -11,8 +11,8 @@
 #include "core/collision/response.hpp"
 #include "core/simulator.hpp"
 #include "tests/core/allocation_counter.hpp"
-#include "tests/core/exact_geometry.hpp"
 #include "tests/core/test_worlds.hpp"
+#include "tests/support/intersection_checker.hpp"
 
 namespace softbake {
 namespace {
@@ -230,25 +230,10 @@ TEST(CollisionResponse, PaperModeMovesOnlyTheParticleAndSoDoesNotConserveMomentu
 constexpr std::size_t kInterpenetrationBound = 0;
 
 /// Pairs of triangles of different surfaces (bodies and static meshes) that intersect, by the
-/// double-precision reference of the tests, not by the code under test. Brute force over pairs
-/// whose boxes overlap.
+/// tests' exact checker, not by the code under test.
 std::size_t intersectingPairsBetweenSurfaces(const Simulator& simulator) {
-  const CollisionGeometry& g = simulator.topology().collision;
-  auto corner = [&](Index v) -> Vec3d {
-    return g.vertex(simulator.state().position, v).cast<double>();
-  };
-  std::vector<Eigen::AlignedBox3d> boxes(g.triangleVertices.size());
-  for (std::size_t t = 0; t < boxes.size(); ++t)
-    for (Index v : g.triangleVertices[t]) boxes[t].extend(corner(v));
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < boxes.size(); ++i)
-    for (std::size_t j = i + 1; j < boxes.size(); ++j) {
-      if (g.triangleSurface[i] == g.triangleSurface[j] || !boxes[i].intersects(boxes[j])) continue;
-      const Triangle &a = g.triangleVertices[i], &b = g.triangleVertices[j];
-      count += test::trianglesIntersect({corner(a[0]), corner(a[1]), corner(a[2])},
-                                        {corner(b[0]), corner(b[1]), corner(b[2])});
-    }
-  return count;
+  return test::countIntersectingPairs(simulator.topology().collision, simulator.state().position)
+      .betweenSurfaces;
 }
 
 SceneSetup twoBallsThrownAtEachOther() {

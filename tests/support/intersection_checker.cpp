@@ -1,0 +1,65 @@
+#include "tests/support/intersection_checker.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <numeric>
+#include <vector>
+
+namespace softbake::test {
+
+namespace {
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+bool shareAVertex(const Triangle& a, const Triangle& b) {
+  for (Index u : a)
+    for (Index v : b)
+      if (u == v) return true;
+  return false;
+}
+}  // namespace
+
+IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
+                                         std::span<const Vec3> positions) {
+  const std::size_t count = geometry.triangleVertices.size();
+  std::vector<Kernel::Triangle_3> triangles;
+  std::vector<Eigen::AlignedBox3d> boxes(count);
+  triangles.reserve(count);
+  for (std::size_t t = 0; t < count; ++t) {
+    std::array<Kernel::Point_3, 3> corner;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d p = geometry.vertex(positions, geometry.triangleVertices[t][k]).cast<double>();
+      corner[k] = Kernel::Point_3(p.x(), p.y(), p.z());
+      boxes[t].extend(p);
+    }
+    triangles.emplace_back(corner[0], corner[1], corner[2]);
+  }
+  // Sweep along x: the triangles in order of their boxes' lower x; each is tested against the
+  // following ones until their lower x passes its upper x.
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return boxes[a].min().x() < boxes[b].min().x(); });
+  IntersectionCount result;
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t a = order[i];
+    if (triangles[a].is_degenerate()) continue;
+    for (std::size_t j = i + 1; j < count; ++j) {
+      const std::size_t b = order[j];
+      if (boxes[b].min().x() > boxes[a].max().x()) break;
+      if (!boxes[a].intersects(boxes[b]) || triangles[b].is_degenerate()) continue;
+      const Index surfaceA = geometry.triangleSurface[a], surfaceB = geometry.triangleSurface[b];
+      const bool within = surfaceA == surfaceB;
+      if (within && shareAVertex(geometry.triangleVertices[a], geometry.triangleVertices[b]))
+        continue;
+      if (!CGAL::do_intersect(triangles[a], triangles[b])) continue;
+      (within ? result.withinSurfaces : result.betweenSurfaces) += 1;
+      ++result.bySurfaces[{std::min(surfaceA, surfaceB), std::max(surfaceA, surfaceB)}];
+    }
+  }
+  return result;
+}
+
+}  // namespace softbake::test

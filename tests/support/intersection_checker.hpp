@@ -1,0 +1,41 @@
+#pragma once
+/// The tests' own count of intersecting triangle pairs, exact: what "no interpenetration" means in
+/// every collision test, computed independently of the code under test (core/collision).
+///
+/// Triangle pairs whose bounding boxes overlap (a sweep along x) are decided by CGAL's
+/// triangle–triangle intersection test on the exact-predicates kernel (Epick): each orientation
+/// predicate is evaluated in interval arithmetic first and, only when the interval straddles zero,
+/// again in exact multi-precision arithmetic. Float coordinates convert to double exactly, so the
+/// answer is exact for the geometry the simulation holds: touching counts as intersecting, and no
+/// tolerance hides a crossing.
+///
+/// Counted:
+/// - between surfaces: every pair of triangles of two different surfaces (bodies and static
+///   meshes);
+/// - within a surface: pairs of one surface's triangles that share no vertex (triangles that share
+///   one touch there by construction; a fold across a shared edge or vertex is not counted).
+/// Zero-area triangles are skipped: they have no inside to cross.
+
+#include <cstddef>
+#include <map>
+#include <span>
+#include <utility>
+
+#include "core/collision/geometry.hpp"
+#include "core/types.hpp"
+
+namespace softbake::test {
+
+struct IntersectionCount {
+  std::size_t betweenSurfaces = 0;
+  std::size_t withinSurfaces = 0;
+  /// Per pair of surfaces (lower index first; a surface with itself for the pairs within one).
+  std::map<std::pair<Index, Index>, std::size_t> bySurfaces;
+  std::size_t total() const { return betweenSurfaces + withinSurfaces; }
+};
+
+/// Counts the intersecting triangle pairs of `geometry` with its particles at `positions`.
+IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
+                                         std::span<const Vec3> positions);
+
+}  // namespace softbake::test
