@@ -124,6 +124,28 @@ void removeStaleFrames(const fs::path& folder, const std::string& scene, const c
       fs::remove(entry.path(), error);
 }
 
+/// Surfaces that intersect at the start, per pair of bodies (or colliders) and per body with
+/// itself, and what the run does with them.
+void describeInitialOverlaps(const Simulator& simulator) {
+  const InitialOverlaps& overlaps = simulator.initialOverlaps();
+  if (overlaps.empty()) return;
+  const SceneTopology& topology = simulator.topology();
+  std::string list;
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces) {
+    list += list.empty() ? "" : ", ";
+    list += overlap.firstSurface == overlap.secondSurface
+                ? cat("'", topology.surfaceName(overlap.firstSurface), "' with itself")
+                : cat("'", topology.surfaceName(overlap.firstSurface), "' and '",
+                      topology.surfaceName(overlap.secondSurface), "'");
+    list += cat(" (", overlap.trianglePairs, " triangle pairs)");
+  }
+  const bool ignore = topology.settings.collisions.initialOverlap == InitialOverlapMode::Ignore;
+  std::printf("warning: surfaces intersect at the start: %s; %s\n", list.c_str(),
+              ignore ? "those surfaces never collide with each other (initial_overlap \"ignore\")"
+                     : "they are pushed apart over the first frames (initial_overlap "
+                       "\"separate\"; \"ignore\" glues them)");
+}
+
 /// The scene's size, its substeps and its collision setup, on stdout.
 void describeRun(const std::string& name, const Simulator& simulator) {
   const SceneTopology& topology = simulator.topology();
@@ -144,6 +166,7 @@ void describeRun(const std::string& name, const Simulator& simulator) {
                 std::string(responseModeName(collisions.response)).c_str());
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
+  describeInitialOverlaps(simulator);
 }
 
 /// Every writer the scene's output asks for, each sequence's stale frames of an earlier, longer

@@ -28,6 +28,9 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     collides_ = collides_ || surface.selfCollision;
   }
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
+  initialOverlaps_ = findInitialOverlaps(*topology_, state_.position);
+  if (topology_->settings.collisions.initialOverlap == InitialOverlapMode::Ignore)
+    detector_.ignoreOverlaps(initialOverlaps_);
   const IntegratorKind integrator = topology_->settings.integrator;
   if (integrator == IntegratorKind::Implicit) {
     implicit_.emplace(*topology_);

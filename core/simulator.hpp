@@ -19,6 +19,7 @@
 
 #include "core/collision/contact.hpp"
 #include "core/collision/detection.hpp"
+#include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
 #include "core/dynamics/contact_holds.hpp"
 #include "core/dynamics/forces.hpp"
@@ -71,6 +72,9 @@ class Simulator {
   const StageTimes& lastStepTimes() const { return stepTimes_; }
   /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f.
   const std::vector<Contact>& contacts() const { return contacts_; }
+  /// The triangle pairs that intersect at the start, found when the simulator was made; what is
+  /// done with them is settings.collisions.initial_overlap.
+  const InitialOverlaps& initialOverlaps() const { return initialOverlaps_; }
   /// Whether the scene has anything the collision pipeline could find (two surfaces, or one
   /// that self-collides); planes are handled on their own.
   bool collides() const { return collides_; }
@@ -101,6 +105,7 @@ class Simulator {
   ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;
   CollisionDetector detector_;
+  InitialOverlaps initialOverlaps_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
   /// Contacts the next implicit step holds. Like the implicit integrator's warm start, they carry

@@ -1,5 +1,7 @@
 #include "importers/scene_file.hpp"
 
+#include "core/collision/initial_overlap.hpp"
+
 #include <cmath>
 #include <limits>
 #include <map>
@@ -111,8 +113,8 @@ class SceneParser {
   }
 
   void parseCollisions(const JsonValue& value) {
-    const JsonObject object =
-        value.object({"broadphase", "levels", "response", "restitution", "friction", "pair_cache"});
+    const JsonObject object = value.object({"broadphase", "levels", "response", "restitution",
+                                            "friction", "pair_cache", "initial_overlap"});
     CollisionSettings& collisions = scene_.setup.settings.collisions;
     if (auto broadPhase = object.find("broadphase")) {
       if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
@@ -129,6 +131,10 @@ class SceneParser {
     if (auto friction = object.find("friction"))
       collisions.friction = Scalar(friction->numberAtLeast(0));
     if (auto pairCache = object.find("pair_cache")) collisions.pairCache = pairCache->boolean();
+    if (auto initialOverlap = object.find("initial_overlap")) {
+      if (!parseInitialOverlapMode(initialOverlap->string(), collisions.initialOverlap))
+        initialOverlap->fail(cat("expected ", alternatives(initialOverlapModeNames(), "\"")));
+    }
   }
 
   // The meshes a `mesh` key names, in their own space. A file may hold several.

@@ -96,6 +96,12 @@ CollisionDetector::CollisionDetector(const CollisionSettings& settings)
   if (settings.pairCache) pairCache_.emplace();
 }
 
+void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
+  ignoredSurfaces_.clear();
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
+    ignoredSurfaces_.emplace_back(overlap.firstSurface, overlap.secondSurface);
+}
+
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
                                StageClock* clock) {
   const CollisionGeometry& geometry = topology.collision;
@@ -105,6 +111,12 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
     pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_), pairs_);
   else
     broadPhase_->findPairs(geometry.broadPhaseInput(boxes_), pairs_);
+  if (!ignoredSurfaces_.empty())
+    std::erase_if(pairs_, [&](const TrianglePair& pair) {
+      return std::binary_search(
+          ignoredSurfaces_.begin(), ignoredSurfaces_.end(),
+          std::pair(geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]));
+    });
   if (clock) clock->lap(Stage::BroadPhase);
   findEdgeContacts(geometry, motion.end);
   findParticleContacts(topology, motion);

@@ -14,6 +14,7 @@
 
 #include "core/collision/broad_phase.hpp"
 #include "core/collision/geometry.hpp"
+#include "core/collision/initial_overlap.hpp"
 #include "core/collision/line_triangle.hpp"
 #include "core/collision/pair_cache.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
@@ -50,6 +51,10 @@ class CollisionDetector {
   void detect(const SceneTopology& topology, const SubstepMotion& motion,
               StageClock* clock = nullptr);
 
+  /// Under initial_overlap "ignore": two surfaces (or one with itself) that intersected at the
+  /// start never collide with each other; every other pair of surfaces still does.
+  void ignoreOverlaps(const InitialOverlaps& overlaps);
+
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sorted by candidate pair, then direction and edge.
   const std::vector<EdgeContact>& edgeContacts() const { return edgeContacts_; }
@@ -67,6 +72,7 @@ class CollisionDetector {
   std::unique_ptr<BroadPhase> broadPhase_;
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;
+  std::vector<std::pair<Index, Index>> ignoredSurfaces_;  ///< surface pairs that overlapped, sorted
   std::vector<TrianglePairHits> pairHits_;
   std::vector<std::vector<ParticleContact>> chunkHits_;  ///< particle hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;

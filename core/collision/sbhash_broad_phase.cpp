@@ -316,7 +316,7 @@ void SbhashBroadPhase::findLeafPairs(const BroadPhaseInput& input) {
 }
 
 void SbhashBroadPhase::trianglePairs(const BroadPhaseInput& input,
-                                      std::vector<TrianglePair>& pairs) {
+                                     std::vector<TrianglePair>& pairs) {
   const std::size_t chunks = std::min(kMaxChunks, leafPairs_.size());
   const std::size_t perChunk = chunks ? (leafPairs_.size() + chunks - 1) / chunks : 0;
   buffers_.reset(chunks);

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/collision/sbhash_broad_phase.hpp"  // BoxHashGrid: the same cell hash, one grid per level
 #include "core/collision/broad_phase.hpp"
+#include "core/collision/sbhash_broad_phase.hpp"  // BoxHashGrid: the same cell hash, one grid per level
 
 namespace softbake {
 

@@ -73,6 +73,15 @@ std::vector<std::string> responseModeNames();
 /// The mode a name gives, or false for an unknown name.
 bool parseResponseMode(std::string_view name, ResponseMode& mode);
 
+/// What the collision stage does with surfaces that intersect at the start
+/// (core/collision/initial_overlap.hpp).
+enum class InitialOverlapMode {
+  Separate,  ///< resolved like any contact, over the first frames
+  Ignore,    ///< the triangle pairs that intersect at the start never collide (glued parts)
+};
+inline constexpr InitialOverlapMode kInitialOverlapModes[] = {InitialOverlapMode::Separate,
+                                                              InitialOverlapMode::Ignore};
+
 /// How a substep advances velocities and positions (core/dynamics/).
 enum class IntegratorKind {
   Explicit,  ///< the paper's explicit (symplectic) Euler, §1.2: stable below a time-step bound
@@ -103,6 +112,7 @@ struct CollisionSettings {
   /// (core/collision/pair_cache.hpp): identical results, the broad phase once every few dozen
   /// steps. Off runs the broad phase every step, to compare broad phases themselves.
   bool pairCache = true;
+  InitialOverlapMode initialOverlap = InitialOverlapMode::Separate;
 };
 
 struct SimulationSettings {

@@ -81,6 +81,11 @@ struct SceneTopology {
   CollisionGeometry collision;  ///< soft and static triangles for the collision pipeline
 
   std::size_t particleCount() const { return mass.size(); }
+  /// The name of collision surface `surface`: the bodies come first, then the static meshes.
+  const std::string& surfaceName(Index surface) const {
+    return surface < bodies.size() ? bodies[surface].name
+                                   : staticMeshes[surface - bodies.size()].name;
+  }
   /// The body's triangles, in global particle indices.
   std::span<const Triangle> bodyTriangles(const Body& body) const {
     return std::span(triangles).subspan(body.firstTriangle, body.triangleCount);

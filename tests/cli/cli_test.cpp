@@ -332,6 +332,32 @@ TEST_F(CliTest, ImplicitIntegratorRunsTheDefaultSceneInFewSubsteps) {
   EXPECT_NE(bad.output.find("verlet"), std::string::npos) << bad.output;
 }
 
+TEST_F(CliTest, BodiesThatStartInsideEachOtherAreReportedWithWhatTheRunDoes) {
+  const std::string bodies = R"("bodies": [
+    {"name": "left", "mesh": {"primitive": "icosphere"}, "transform": {"translate": [-0.4, 1, 0]}},
+    {"name": "right", "mesh": {"primitive": "icosphere"}, "transform": {"translate": [0.4, 1.03, 0.02]}}])";
+  const fs::path separate =
+      writeScene("separate.json", R"({"settings": {"frames": 2}, )" + bodies + "}");
+  const Result run = runSoftbake("run " + quoted(separate.string()) + " --no-render -q -o " +
+                                 quoted((folder_ / "s").string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("surfaces intersect at the start: 'left' and 'right' ("),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("pushed apart over the first frames"), std::string::npos) << run.output;
+  const fs::path glued = writeScene(
+      "glued.json", R"({"settings": {"frames": 2, "collisions": {"initial_overlap": "ignore"}}, )" +
+                        bodies + "}");
+  const Result gluedRun = runSoftbake("run " + quoted(glued.string()) + " --no-render -q -o " +
+                                      quoted((folder_ / "g").string()));
+  ASSERT_EQ(gluedRun.exitCode, 0) << gluedRun.output;
+  EXPECT_NE(gluedRun.output.find("never collide with each other"), std::string::npos)
+      << gluedRun.output;
+  const Result apart =
+      runSoftbake("run --frames 2 --no-render -q -o " + quoted((folder_ / "d").string()));
+  EXPECT_EQ(apart.output.find("intersect at the start"), std::string::npos) << apart.output;
+}
+
 TEST_F(CliTest, SceneKeyIntegratorIsReadAndCheckedWithItsPath) {
   const fs::path scene = writeScene("implicit.json", R"({"settings": {"integrator": "implicit",
     "frames": 3}, "bodies": [{"name": "ball", "mesh": {"primitive": "icosphere"}}]})");

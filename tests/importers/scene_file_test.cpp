@@ -346,7 +346,8 @@ TEST(SceneFile, MultiMeshFilesGiveOneBodyPerMeshUnlessMerged) {
 TEST(SceneFile, ReadsTheCollisionKeys) {
   const SceneFile scene = parse(R"({
     "settings": {"collisions": {"broadphase": "bvh", "levels": 2, "response": "paper",
-                                "restitution": 0.5, "friction": 0.1}},
+                                "restitution": 0.5, "friction": 0.1,
+                                "initial_overlap": "ignore"}},
     "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true}],
     "output": {"contacts": true}
   })");
@@ -356,6 +357,7 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   EXPECT_EQ(collisions.response, ResponseMode::Paper);
   EXPECT_FLOAT_EQ(collisions.restitution, 0.5f);
   EXPECT_FLOAT_EQ(collisions.friction, 0.1f);
+  EXPECT_EQ(collisions.initialOverlap, InitialOverlapMode::Ignore);
   EXPECT_EQ(scene.setup.bodies[0].selfCollision, std::optional<bool>(true));
   EXPECT_TRUE(scene.output.contacts);
   EXPECT_FALSE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
@@ -372,6 +374,10 @@ TEST(SceneFile, CollisionKeyErrorsNameTheKeyPath) {
               ::testing::HasSubstr("settings.collisions.response"));
   EXPECT_THAT(sceneError(cat(R"({"settings": {"collisions": {"levels": 12}}, )", body, "}")),
               ::testing::HasSubstr("settings.collisions.levels"));
+  EXPECT_THAT(
+      sceneError(cat(R"({"settings": {"collisions": {"initial_overlap": "glue"}}, )", body, "}")),
+      ::testing::HasSubstr(
+          R"(settings.collisions.initial_overlap: expected "separate" or "ignore")"));
   EXPECT_THAT(
       sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": 1}]})"),
       ::testing::HasSubstr("bodies[0].self_collision"));
