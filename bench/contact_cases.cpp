@@ -1,0 +1,93 @@
+// The hard contact cases (issue: contacts that hold in the hard cases), measured frame by frame:
+// intersecting triangle pairs by the tests' exact checker, contacts and the response's cost per
+// substep, energy above the start, and whether the run reached its last frame. One markdown table
+// row per scene: bench/contacts.sh writes bench/results/contacts.md from them.
+//
+//   contact_cases SCENE.json [explicit|implicit|xpbd] [initial_overlap]
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+
+#include "core/collision/initial_overlap.hpp"
+#include "core/dynamics/energy.hpp"
+#include "core/error.hpp"
+#include "core/simulator.hpp"
+#include "importers/scene_file.hpp"
+#include "tests/support/intersection_checker.hpp"
+
+using namespace softbake;
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr,
+                 "usage: contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore]\n");
+    return 1;
+  }
+  try {
+    SceneFile file = loadSceneFile(argv[1]);
+    SimulationSettings& settings = file.setup.settings;
+    if (argc > 2 && !parseIntegrator(argv[2], settings.integrator))
+      throw Error(std::string("unknown integrator ") + argv[2]);
+    if (argc > 3 && !parseInitialOverlapMode(argv[3], settings.collisions.initialOverlap))
+      throw Error(std::string("unknown initial_overlap ") + argv[3]);
+    Simulator simulator(buildSceneTopology(file.setup));
+    simulator.measureStages(true);
+    const double start = computeEnergy(simulator.topology(), simulator.state()).total();
+    double highest = start, responseSeconds = 0;
+    std::size_t worstBetween = 0, worstWithin = 0, framesBetween = 0, framesWithin = 0;
+    std::size_t contacts = 0, substeps = 0;
+    int reached = 1;
+    std::string failure;
+    const auto wallStart = std::chrono::steady_clock::now();
+    double checkSeconds = 0;
+    for (int frame = 2; frame <= settings.frames; ++frame) {
+      try {
+        simulator.beginFrame();
+        for (int s = 0; s < simulator.substeps().substeps; ++s) {
+          simulator.step(frame);
+          responseSeconds +=
+              1e-9 * double(simulator.lastStepTimes().nanoseconds[int(Stage::Response)]);
+        }
+      } catch (const Error& error) {
+        failure = error.what();
+        break;
+      }
+      reached = frame;
+      substeps += std::size_t(simulator.substeps().substeps);
+      contacts += simulator.lastFrameStats().contacts;
+      const auto checkStart = std::chrono::steady_clock::now();
+      const test::IntersectionCount count =
+          test::countIntersectingPairs(simulator.topology().collision, simulator.state().position);
+      checkSeconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - checkStart).count();
+      worstBetween = std::max(worstBetween, count.betweenSurfaces);
+      worstWithin = std::max(worstWithin, count.withinSurfaces);
+      framesBetween += count.betweenSurfaces > 0;
+      framesWithin += count.withinSurfaces > 0;
+      highest = std::max(highest, computeEnergy(simulator.topology(), simulator.state()).total());
+    }
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count() -
+        checkSeconds;
+    std::size_t triangles = 0;
+    for (const Body& body : simulator.topology().bodies) triangles += body.triangleCount;
+    std::printf(
+        "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
+        "%.1f |\n",
+        std::filesystem::path(argv[1]).stem().string().c_str(),
+        std::string(integratorName(settings.integrator)).c_str(),
+        simulator.topology().bodies.size(), triangles,
+        failure.empty() ? std::to_string(reached).c_str()
+                        : ("blew up at " + std::to_string(reached + 1)).c_str(),
+        worstBetween, framesBetween, worstWithin, framesWithin,
+        substeps ? double(contacts) / double(substeps) : 0.0,
+        substeps ? 1e3 * responseSeconds / double(substeps) : 0.0, highest - start,
+        double(reached - 1) / wall);
+    return 0;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "contact_cases: %s\n", error.what());
+    return 1;
+  }
+}
