@@ -33,23 +33,53 @@ bool hasVertex(const Triangle& t, Index v) {
 /// particle's start already behind the other's new surface, and the crossing would go unseen.
 /// Exact for a translating triangle; for a rotating or stretching one, edge contacts catch what is
 /// left.
+///
+/// An open surface (a sheet) bends and stretches under what it catches, where the centroid's shift
+/// is a poor model of its motion: a particle could pass through it unseen, and an open surface has
+/// no inside from which an edge push could bring the particle back. So against an open surface a
+/// particle also counts as crossing when it changed sides of the triangle's plane between the
+/// substep's start (the triangle where it was then) and its end, with its end over the triangle.
 struct ParticleTarget {
   Index triangle;
   TriangleCorners now;
-  Vec3 shift;   ///< the centroid's displacement over the substep
-  Vec3 normal;  ///< unnormalised, as intersectSegmentTriangle computes it
+  Vec3 shift;                     ///< the centroid's displacement over the substep
+  Vec3 normal;                    ///< unnormalised, as intersectSegmentTriangle computes it
+  bool open;                      ///< the triangle's surface is open
+  Vec3 startCorner, startNormal;  ///< corner 0 and normal at the substep's start (open only)
 };
 
 ParticleTarget particleTarget(const CollisionGeometry& geometry, const SubstepMotion& motion,
                               Index triangle) {
   const Triangle& t = geometry.triangleVertices[triangle];
-  ParticleTarget target{triangle, corners(geometry, motion.end, triangle), Vec3::Zero(),
+  ParticleTarget target{triangle,
+                        corners(geometry, motion.end, triangle),
+                        Vec3::Zero(),
+                        Vec3::Zero(),
+                        !geometry.surfaceClosed[geometry.triangleSurface[triangle]],
+                        Vec3::Zero(),
                         Vec3::Zero()};
   Vec3 displacement = Vec3::Zero();
   for (int k = 0; k < 3; ++k) displacement += target.now[k] - geometry.vertex(motion.start, t[k]);
   target.shift = displacement / Scalar(3);
   target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
+  if (target.open) {
+    const TriangleCorners then = corners(geometry, motion.start, triangle);
+    target.startCorner = then[0];
+    target.startNormal = (then[1] - then[0]).cross(then[2] - then[0]);
+  }
   return target;
+}
+
+/// The sides of the triangle's plane particle p was on at the substep's start (against the
+/// triangle then) and is on at its end (against the triangle now).
+std::pair<Scalar, Scalar> sidesAcrossTheStep(const SubstepMotion& motion, Index p,
+                                             const ParticleTarget& target) {
+  return {target.startNormal.dot(motion.start[p] - target.startCorner),
+          target.normal.dot(motion.end[p] - target.now[0])};
+}
+
+bool changedSides(const std::pair<Scalar, Scalar>& sides) {
+  return (sides.first > 0 && sides.second < 0) || (sides.first < 0 && sides.second > 0);
 }
 
 /// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
@@ -59,8 +89,34 @@ bool mayCross(const SubstepMotion& motion, Index p, const ParticleTarget& target
   const Vec3 start = motion.start[p] + target.shift;
   const Scalar startSide = target.normal.dot(start - target.now[0]);
   const Scalar endSide = target.normal.dot(motion.end[p] - target.now[0]);
-  return !((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
-         startSide != endSide;
+  return (!((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
+          startSide != endSide) ||
+         (target.open && changedSides(sidesAcrossTheStep(motion, p, target)));
+}
+
+/// Against an open surface: p changed sides of the triangle across the substep and ends over it.
+/// The hit is where its end projects onto the triangle, on the side it came from.
+bool crossedOpenSurface(const SubstepMotion& motion, Index p, const ParticleTarget& target,
+                        ParticleContact& contact) {
+  const std::pair<Scalar, Scalar> sides = sidesAcrossTheStep(motion, p, target);
+  if (!changedSides(sides)) return false;
+  const TriangleCorners& now = target.now;
+  const Scalar area2 = target.normal.squaredNorm();
+  if (!(area2 > 0)) return false;
+  const Vec3 projection = motion.end[p] - (sides.second / area2) * target.normal;
+  // Barycentric weights of the projection from the sub-triangle areas (Ericson §3.4).
+  const Vec3 ap = projection - now[0];
+  const Scalar v = target.normal.dot((now[1] - now[0]).cross(ap)) / area2;
+  const Scalar w = target.normal.dot(ap.cross(now[2] - now[0])) / area2;
+  const Vec3 barycentric(1 - v - w, w, v);
+  if (!(barycentric.minCoeff() >= 0)) return false;
+  contact.hit.t = sides.first / (sides.first - sides.second);
+  contact.hit.point = projection;
+  contact.hit.barycentric = barycentric;
+  contact.particle = p;
+  contact.triangle = target.triangle;
+  contact.normal = (sides.first > 0 ? Scalar(1) : Scalar(-1)) * target.normal.normalized();
+  return true;
 }
 
 /// Tests particle p's motion against the target triangle.
@@ -70,7 +126,8 @@ bool testParticle(const CollisionGeometry& geometry, const SubstepMotion& motion
   const TriangleCorners& now = target.now;
   const Vec3 start = motion.start[p] + target.shift;
   const Vec3& end = motion.end[p];
-  if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit)) return false;
+  if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit))
+    return target.open && crossedOpenSurface(motion, p, target, contact);
 
   const Vec3& normal = target.normal;
   const Scalar startSide = normal.dot(start - now[0]), endSide = normal.dot(end - now[0]);

@@ -126,6 +126,55 @@ TEST(CollisionResponse, Case2PutsTheParticleOnTheCornerLineAndUsesTheAverageNorm
               1e-5);  // moving straight into the corner: stops
 }
 
+/// A soft open sheet bends under a particle in one substep: one corner rises through the particle's
+/// path while the others stay. Shifted by the sheet's centroid, the particle's segment stays on
+/// one side of the sheet and the segment test misses it; it did change sides of the sheet, so the
+/// open-surface rule finds it, from the side it came from, and the response puts it back there.
+TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCameFrom) {
+  SceneSetup scene;
+  scene.settings.gravity.setZero();
+  BodySetup sheet;
+  sheet.name = "sheet";
+  sheet.mesh.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+  sheet.mesh.triangles = {{0, 1, 2}};
+  scene.bodies.push_back(sheet);
+  BodySetup dart;
+  dart.name = "dart";
+  dart.mesh.positions = {Vec3f(0.25f, 0.25f, 0.1f), Vec3f(0.9f, 0.9f, 0.4f),
+                         Vec3f(0.9f, 0.8f, 0.5f)};
+  dart.mesh.triangles = {{0, 1, 2}};
+  dart.pins.particles = {1, 2};
+  scene.bodies.push_back(dart);
+  test::StagedScene staged(buildSceneTopology(scene));
+  const Index tip = 3;  // the dart's free corner: the sheet's three particles come first
+  ASSERT_TRUE(staged.topology.collision.surfaces.size() == 2 &&
+              !staged.topology.collision.surfaceClosed[0]);
+  staged.substepStart = staged.state.position;
+  staged.state.position[0] = Vec3(0, 0, 1);               // the sheet's corner 0 rises by 1
+  staged.state.position[tip] = Vec3(0.25f, 0.25f, 0.2f);  // the tip rises by 0.1, less
+  staged.state.velocity[tip] = Vec3(0, 0, 2.4f);
+  // The sheet's plane now is z = 1 − x − y, at 0.5 over the tip: the tip was above the sheet at
+  // the start and is below it now. The centroid rose by 1/3, so the shifted start (z 0.433) is
+  // below the plane too.
+  SegmentTriangleHit hit;
+  ASSERT_FALSE(intersectSegmentTriangle(Vec3(0.25f, 0.25f, 0.1f + 1.0f / 3),
+                                        staged.state.position[tip], staged.state.position[0],
+                                        staged.state.position[1], staged.state.position[2], hit));
+  CollisionDetector detector(staged.topology.settings.collisions);
+  detector.detect(staged.topology, {staged.substepStart, staged.state.position});
+  ASSERT_EQ(detector.particleContacts().size(), 1u);
+  const ParticleContact& contact = detector.particleContacts()[0];
+  EXPECT_EQ(contact.particle, tip);
+  EXPECT_GT(contact.normal.z(), 0) << "the tip came from the side the sheet's normal points to";
+  std::vector<Contact> contacts;
+  EdgePushes edgePushes(staged.topology.particleCount());
+  respondToCollisions(staged.topology, detector, ResponseMode::TwoSided, staged.state, contacts,
+                      edgePushes);
+  const std::vector<Vec3>& now = staged.state.position;
+  const Vec3 normal = (now[1] - now[0]).cross(now[2] - now[0]).normalized();
+  EXPECT_GT(normal.dot(now[tip] - now[0]), 0) << "back on its side of the sheet";
+}
+
 TEST(CollisionResponse, DetectionOnlyRecordsTheContactAndMovesNothing) {
   TriangleMesh floor;
   addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));
