@@ -12,7 +12,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${1:-$root/build}
-cases=$build/bench/contact_cases
+cases=$build/bench/contact_cases  # and contact_sweep beside it
 [ -x "$cases" ] || { echo "contacts.sh: build $cases first (it needs the test suite)" >&2; exit 1; }
 
 printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response ms/substep | energy above start, J | frames/s |\n'
@@ -26,3 +26,7 @@ for scene in "$root"/bench/scenes/contact_cases/*.json "$root/examples/fig7_10k_
 done
 "$cases" "$root/bench/scenes/contact_cases/glued_assembly.json" implicit ignore |
   sed 's/^| glued_assembly /| glued_assembly (ignore) /'
+# Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) up to 10:1:
+# the most intersecting pairs between them at a frame's end, or the frame the run blew up at.
+echo
+"$build/bench/contact_sweep"
