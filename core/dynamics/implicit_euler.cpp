@@ -49,6 +49,7 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       holdSpeed_(topology.particleCount(), 0),
       holdFriction_(topology.particleCount(), 0),
       holdResidual_(topology.particleCount(), 0),
+      holdFrictionChange_(topology.particleCount(), Vec3::Zero()),
       bodyHeld_(topology.bodies.size(), 0) {
   held_.reserve(topology.particleCount());
   deltaV_.push_back(Vec3::Zero());  // the zero entry pinned neighbours read
@@ -86,6 +87,7 @@ void ImplicitEuler::releaseHolds() {
   for (Index i : held_) {
     holdNormal_[i].setZero();
     holdResidual_[i] = 0;
+    holdFrictionChange_[i].setZero();
   }
   held_.clear();
 }
@@ -284,8 +286,11 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);
   restoreMomentum(topology);
-  // Coulomb friction at held particles, from the surface's impulse on each.
+  // Coulomb friction at held particles, from the surface's impulse on each. Kept apart from Δv,
+  // which warm-starts the next solve: folded into it, friction's change (a particle stopped dead,
+  // unlike its neighbours) doubled the iterations of bodies resting on the ground.
   for (Index i : held_) {
+    holdFrictionChange_[i].setZero();
     const Scalar impulse = holdImpulse(i);
     if (!(impulse > 0)) continue;
     const Vec3& normal = holdNormal_[i];
@@ -293,8 +298,8 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
     const Vec3 tangential = v - normal.dot(v) * normal;
     const Scalar tangentialSpeed = tangential.norm();
     const Scalar slowdown = holdFriction_[i] * impulse * topology.inverseMass[i];
-    deltaV_[i] -=
-        tangentialSpeed > slowdown ? (slowdown / tangentialSpeed) * tangential : tangential;
+    holdFrictionChange_[i] =
+        -(tangentialSpeed > slowdown ? slowdown / tangentialSpeed : Scalar(1)) * tangential;
   }
   const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
   const Scalar* inverseMass = topology.inverseMass.data();
@@ -305,7 +310,7 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
       state.velocity[i].setZero();
       return;
     }
-    state.velocity[i] += deltaV_[i];
+    state.velocity[i] += deltaV_[i] + holdFrictionChange_[i];
     state.position[i] += dt * state.velocity[i];
     if (isRunaway(state.velocity[i], maxSpeedSquared))
       runaway.store(true, std::memory_order_relaxed);

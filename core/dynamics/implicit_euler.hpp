@@ -139,8 +139,9 @@ class ImplicitEuler {
   /// along it, the friction coefficient; then the normal part of the residual during the solve.
   std::vector<Vec3> holdNormal_;
   std::vector<Scalar> holdSpeed_, holdFriction_, holdResidual_;
-  std::vector<Index> held_;     ///< particles with a hold, reserved for all of them
-  std::vector<char> bodyHeld_;  ///< per body: some particle was held this step
+  std::vector<Vec3> holdFrictionChange_;  ///< friction's velocity change at held particles
+  std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
+  std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
   ImplicitSolveStats stats_;
 };
 
