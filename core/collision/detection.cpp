@@ -95,24 +95,19 @@ bool mayCross(const SubstepMotion& motion, Index p, const ParticleTarget& target
 }
 
 /// Against an open surface: p changed sides of the triangle across the substep and ends over it.
-/// The hit is where its end projects onto the triangle, on the side it came from.
+/// The hit is where its end projects onto the triangle, on the side it came from: the line–triangle
+/// test on the end's segment to its mirror image through the plane, which crosses the plane there.
 bool crossedOpenSurface(const SubstepMotion& motion, Index p, const ParticleTarget& target,
                         ParticleContact& contact) {
   const std::pair<Scalar, Scalar> sides = sidesAcrossTheStep(motion, p, target);
   if (!changedSides(sides)) return false;
-  const TriangleCorners& now = target.now;
   const Scalar area2 = target.normal.squaredNorm();
   if (!(area2 > 0)) return false;
-  const Vec3 projection = motion.end[p] - (sides.second / area2) * target.normal;
-  // Barycentric weights of the projection from the sub-triangle areas (Ericson §3.4).
-  const Vec3 ap = projection - now[0];
-  const Scalar v = target.normal.dot((now[1] - now[0]).cross(ap)) / area2;
-  const Scalar w = target.normal.dot(ap.cross(now[2] - now[0])) / area2;
-  const Vec3 barycentric(1 - v - w, w, v);
-  if (!(barycentric.minCoeff() >= 0)) return false;
-  contact.hit.t = sides.first / (sides.first - sides.second);
-  contact.hit.point = projection;
-  contact.hit.barycentric = barycentric;
+  const Vec3& end = motion.end[p];
+  const Vec3 mirror = end - (2 * sides.second / area2) * target.normal;
+  const TriangleCorners& now = target.now;
+  if (!intersectSegmentTriangle(end, mirror, now[0], now[1], now[2], contact.hit)) return false;
+  contact.hit.t = sides.first / (sides.first - sides.second);  // along the particle's own motion
   contact.particle = p;
   contact.triangle = target.triangle;
   contact.normal = (sides.first > 0 ? Scalar(1) : Scalar(-1)) * target.normal.normalized();

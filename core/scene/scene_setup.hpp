@@ -77,7 +77,7 @@ bool parseResponseMode(std::string_view name, ResponseMode& mode);
 /// (core/collision/initial_overlap.hpp).
 enum class InitialOverlapMode {
   Separate,  ///< resolved like any contact, over the first frames
-  Ignore,    ///< the triangle pairs that intersect at the start never collide (glued parts)
+  Ignore,    ///< surfaces that intersect at the start never collide with each other (glued parts)
 };
 inline constexpr InitialOverlapMode kInitialOverlapModes[] = {InitialOverlapMode::Separate,
                                                               InitialOverlapMode::Ignore};
