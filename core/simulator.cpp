@@ -28,6 +28,13 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     collides_ = collides_ || surface.selfCollision;
   }
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
+  // Detection only (response "none", the paper's figure 5b) lets bodies pass into each other.
+  const CollisionSettings& collisions = topology_->settings.collisions;
+  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None) {
+    failsafe_.emplace(*topology_);
+    if (collisions.initialOverlap == InitialOverlapMode::Separate)
+      failsafe_->leaveTangled(initialOverlaps_);
+  }
   initialOverlaps_ = findInitialOverlaps(*topology_, state_.position);
   if (topology_->settings.collisions.initialOverlap == InitialOverlapMode::Ignore)
     detector_.ignoreOverlaps(initialOverlaps_);
@@ -94,12 +101,23 @@ void Simulator::step(int frame) {
   stats_.planeContacts +=
       resolvePlaneContacts(topology, substepStart_, state_, response != ResponseMode::None,
                            holds_ ? holds_->touchedPlane() : std::span<std::int32_t>());
-  if (holds_) holds_->update(*implicit_);
   clock.lap(Stage::Planes);
+  if (failsafe_) {
+    const FailsafeStats failsafe = failsafe_->apply(topology, detector_, substepStart_, state_, dt);
+    stats_.failsafe.impacts += failsafe.impacts;
+    stats_.failsafe.zoneParticles += failsafe.zoneParticles;
+    stats_.failsafe.frozen += failsafe.frozen;
+    stats_.failsafe.passes += failsafe.passes;
+    clock.lap(Stage::Failsafe);
+  }
+  if (holds_) holds_->update(*implicit_);
 }
 
 void Simulator::beginFrame() {
   stats_ = {};
+  // Surfaces still tangled are left to the response until a frame finds them apart.
+  if (failsafe_ && failsafe_->anyTangled())
+    failsafe_->leaveTangled(findInitialOverlaps(*topology_, state_.position));
   if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
 }
 

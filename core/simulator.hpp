@@ -2,7 +2,7 @@
 /// Advances a SimulationState frame by frame over a shared, immutable SceneTopology: the fixed
 /// sequence of stages of one substep.
 ///
-///   forces (springs, volume, pressure) → integrate → collisions → planes
+///   forces (springs, volume, pressure) → integrate → collisions → planes → failsafe
 ///
 /// The integrator is the paper's explicit Euler (§1.2), backward Euler or XPBD
 /// (settings.integrator); the collision stages after it are the same for all three.
@@ -19,6 +19,7 @@
 
 #include "core/collision/contact.hpp"
 #include "core/collision/detection.hpp"
+#include "core/collision/failsafe.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
 #include "core/dynamics/contact_holds.hpp"
@@ -38,6 +39,7 @@ struct StepStats {
   std::size_t candidatePairs = 0;    ///< broad-phase triangle pairs, summed over the substeps
   std::size_t contacts = 0;          ///< soft and static mesh contacts, summed over the substeps
   CollisionResponseStats responses;  ///< summed over the substeps
+  FailsafeStats failsafe;            ///< summed over the substeps
 };
 
 class Simulator {
@@ -105,6 +107,7 @@ class Simulator {
   ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;
   CollisionDetector detector_;
+  std::optional<CollisionFailsafe> failsafe_;  ///< set when settings.collisions.failsafe is on
   InitialOverlaps initialOverlaps_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;

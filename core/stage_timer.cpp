@@ -18,6 +18,8 @@ const char* stageName(Stage stage) {
       return "response";
     case Stage::Planes:
       return "planes";
+    case Stage::Failsafe:
+      return "failsafe";
   }
   return "unknown";
 }

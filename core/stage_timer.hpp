@@ -10,10 +10,20 @@ namespace softbake {
 
 /// The stages of Simulator::step, in order. BroadPhase is the broad phase's whole findPairs: for
 /// sbhash the surface subdivision, leaf boxes and box hash; for bvh the refit and the traversal.
-enum class Stage : int { Forces, Integration, Boxes, BroadPhase, NarrowPhase, Response, Planes };
-inline constexpr int kStageCount = 7;
+enum class Stage : int {
+  Forces,
+  Integration,
+  Boxes,
+  BroadPhase,
+  NarrowPhase,
+  Response,
+  Planes,
+  Failsafe
+};
+inline constexpr int kStageCount = 8;
 
-/// "forces", "integration", "boxes", "broad_phase", "narrow_phase", "response", "planes".
+/// "forces", "integration", "boxes", "broad_phase", "narrow_phase", "response", "planes",
+/// "failsafe".
 const char* stageName(Stage stage);
 
 struct StageTimes {

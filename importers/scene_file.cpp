@@ -113,8 +113,9 @@ class SceneParser {
   }
 
   void parseCollisions(const JsonValue& value) {
-    const JsonObject object = value.object({"broadphase", "levels", "response", "restitution",
-                                            "friction", "pair_cache", "initial_overlap"});
+    const JsonObject object =
+        value.object({"broadphase", "levels", "response", "restitution", "friction", "pair_cache",
+                      "initial_overlap", "failsafe"});
     CollisionSettings& collisions = scene_.setup.settings.collisions;
     if (auto broadPhase = object.find("broadphase")) {
       if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
@@ -131,6 +132,7 @@ class SceneParser {
     if (auto friction = object.find("friction"))
       collisions.friction = Scalar(friction->numberAtLeast(0));
     if (auto pairCache = object.find("pair_cache")) collisions.pairCache = pairCache->boolean();
+    if (auto failsafe = object.find("failsafe")) collisions.failsafe = failsafe->boolean();
     if (auto initialOverlap = object.find("initial_overlap")) {
       if (!parseInitialOverlapMode(initialOverlap->string(), collisions.initialOverlap))
         initialOverlap->fail(cat("expected ", alternatives(initialOverlapModeNames(), "\"")));

@@ -15,13 +15,6 @@ constexpr std::size_t kPairGrain = 256;
 /// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
 constexpr std::size_t kParticleChunks = 128;
 
-TriangleCorners corners(const CollisionGeometry& geometry, std::span<const Vec3> positions,
-                        Index triangle) {
-  const Triangle& t = geometry.triangleVertices[triangle];
-  return {geometry.vertex(positions, t[0]), geometry.vertex(positions, t[1]),
-          geometry.vertex(positions, t[2])};
-}
-
 bool hasVertex(const Triangle& t, Index v) {
   return t[0] == v || t[1] == v || t[2] == v;
 }
@@ -52,7 +45,7 @@ ParticleTarget particleTarget(const CollisionGeometry& geometry, const SubstepMo
                               Index triangle) {
   const Triangle& t = geometry.triangleVertices[triangle];
   ParticleTarget target{triangle,
-                        corners(geometry, motion.end, triangle),
+                        geometry.corners(motion.end, triangle),
                         Vec3::Zero(),
                         Vec3::Zero(),
                         !geometry.surfaceClosed[geometry.triangleSurface[triangle]],
@@ -63,7 +56,7 @@ ParticleTarget particleTarget(const CollisionGeometry& geometry, const SubstepMo
   target.shift = displacement / Scalar(3);
   target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
   if (target.open) {
-    const TriangleCorners then = corners(geometry, motion.start, triangle);
+    const TriangleCorners then = geometry.corners(motion.start, triangle);
     target.startCorner = then[0];
     target.startNormal = (then[1] - then[0]).cross(then[2] - then[0]);
   }
@@ -154,6 +147,11 @@ void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
     ignoredSurfaces_.emplace_back(overlap.firstSurface, overlap.secondSurface);
 }
 
+void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
+                                         std::vector<TrianglePair>& pairs) const {
+  dropSurfacePairs(geometry, ignoredSurfaces_, pairs);
+}
+
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
                                StageClock* clock) {
   const CollisionGeometry& geometry = topology.collision;
@@ -163,12 +161,7 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
     pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_), pairs_);
   else
     broadPhase_->findPairs(geometry.broadPhaseInput(boxes_), pairs_);
-  if (!ignoredSurfaces_.empty())
-    std::erase_if(pairs_, [&](const TrianglePair& pair) {
-      return std::binary_search(
-          ignoredSurfaces_.begin(), ignoredSurfaces_.end(),
-          std::pair(geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]));
-    });
+  dropIgnoredPairs(geometry, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
   findEdgeContacts(geometry, motion.end);
   findParticleContacts(topology, motion);
@@ -182,8 +175,8 @@ void CollisionDetector::findEdgeContacts(const CollisionGeometry& geometry,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs_.size(), kPairGrain),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i)
-                        intersectTrianglePair(corners(geometry, positions, pairs_[i].first),
-                                              corners(geometry, positions, pairs_[i].second),
+                        intersectTrianglePair(geometry.corners(positions, pairs_[i].first),
+                                              geometry.corners(positions, pairs_[i].second),
                                               pairHits_[i]);
                     });
   edgeContacts_.clear();

@@ -54,6 +54,8 @@ class CollisionDetector {
   /// Under initial_overlap "ignore": two surfaces (or one with itself) that intersected at the
   /// start never collide with each other; every other pair of surfaces still does.
   void ignoreOverlaps(const InitialOverlaps& overlaps);
+  /// Removes from `pairs` those between surfaces that ignoreOverlaps() made ignore each other.
+  void dropIgnoredPairs(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sorted by candidate pair, then direction and edge.
@@ -61,6 +63,9 @@ class CollisionDetector {
   /// Sorted by particle, then by when the particle crossed (t), then by triangle.
   const std::vector<ParticleContact>& particleContacts() const { return particleContacts_; }
   BroadPhaseKind broadPhase() const { return broadPhase_->kind(); }
+  /// The pair cache, when settings.collisions.pair_cache is on: later stages of the substep may
+  /// take their pairs from it.
+  PairCache* pairCache() { return pairCache_ ? &*pairCache_ : nullptr; }
   /// This substep's box of every collision triangle.
   std::span<const Box3> triangleBoxes() const { return boxes_; }
 

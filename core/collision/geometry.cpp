@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 #include "core/mesh/mesh_topology.hpp"
 #include "core/mesh/weld.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -66,17 +68,32 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
   return geometry;
 }
 
+void dropSurfacePairs(const CollisionGeometry& geometry,
+                      std::span<const std::pair<Index, Index>> surfacePairs,
+                      std::vector<TrianglePair>& pairs) {
+  if (surfacePairs.empty()) return;
+  std::erase_if(pairs, [&](const TrianglePair& pair) {
+    return std::binary_search(
+        surfacePairs.begin(), surfacePairs.end(),
+        std::pair(geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]));
+  });
+}
+
 void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
                           std::vector<Box3>& boxes) {
+  updateCollisionBoxes(topology, motion, boxes, topology.settings.skin);
+}
+
+void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
+                          std::vector<Box3>& boxes, Scalar margin) {
   const CollisionGeometry& geometry = topology.collision;
-  const Scalar skin = topology.settings.skin;
   if (boxes.size() != geometry.triangleVertices.size()) {
     boxes.resize(geometry.triangleVertices.size());
     for (std::size_t t = geometry.softTriangleCount; t < boxes.size(); ++t) {
       Box3 box;
       for (Index v : geometry.triangleVertices[t])
         box.extend(geometry.staticVertex[v - geometry.particleCount]);
-      boxes[t] = inflated(box, skin);
+      boxes[t] = inflated(box, margin);
     }
   }
   const Triangle* triangles = topology.triangles.data();
@@ -91,7 +108,7 @@ void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& mo
                           box.extend(x[v]);
                           box.extend(x0[v]);
                         }
-                        out[t] = inflated(box, skin);
+                        out[t] = inflated(box, margin);
                       }
                     });
 }

@@ -7,9 +7,11 @@
 /// pipeline, and the broad phases need no notion of "soft" or "static".
 
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/types.hpp"
 
@@ -32,11 +34,22 @@ struct CollisionGeometry {
   const Vec3& vertex(std::span<const Vec3> positions, Index v) const {
     return v < particleCount ? positions[v] : staticVertex[v - particleCount];
   }
+  /// The corners of collision triangle `triangle`, its particles taken from `positions`.
+  TriangleCorners corners(std::span<const Vec3> positions, Index triangle) const {
+    const Triangle& t = triangleVertices[triangle];
+    return {vertex(positions, t[0]), vertex(positions, t[1]), vertex(positions, t[2])};
+  }
   /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle).
   BroadPhaseInput broadPhaseInput(std::span<const Box3> triangleBox) const {
     return {triangleBox, triangleVertices, triangleSurface, surfaces};
   }
 };
+
+/// Removes from `pairs` the triangle pairs between the surfaces of `surfacePairs` (sorted, lower
+/// surface first; a surface with itself for pairs within one).
+void dropSurfacePairs(const CollisionGeometry& geometry,
+                      std::span<const std::pair<Index, Index>> surfacePairs,
+                      std::vector<TrianglePair>& pairs);
 
 /// The collision geometry of the topology's bodies and static mesh colliders (welded, so
 /// triangles that touch share vertices). Called by buildSceneTopology().
@@ -48,5 +61,9 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology);
 /// when `boxes` does not have the right size yet, and kept after that.
 void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
                           std::vector<Box3>& boxes);
+/// The same, inflated by `margin` instead of the skin (a box is grown by a margin only once: the
+/// static triangles' boxes keep the margin of the first call).
+void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
+                          std::vector<Box3>& boxes, Scalar margin);
 
 }  // namespace softbake

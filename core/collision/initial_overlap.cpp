@@ -26,13 +26,10 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
 
   std::map<std::pair<Index, Index>, std::size_t> bySurfaces;
   TrianglePairHits hits;
-  auto corners = [&](Index triangle) -> TriangleCorners {
-    const Triangle& t = geometry.triangleVertices[triangle];
-    return {geometry.vertex(positions, t[0]), geometry.vertex(positions, t[1]),
-            geometry.vertex(positions, t[2])};
-  };
   for (const TrianglePair& pair : candidates) {
-    if (!intersectTrianglePair(corners(pair.first), corners(pair.second), hits)) continue;
+    if (!intersectTrianglePair(geometry.corners(positions, pair.first),
+                               geometry.corners(positions, pair.second), hits))
+      continue;
     overlaps.pairs.push_back(pair);
     ++bySurfaces[{geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]}];
   }

@@ -53,6 +53,16 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
 void PairCache::findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                           std::vector<TrianglePair>& pairs) {
   if (!stillValid(input)) rebuild(broadPhase, input);
+  filter(input, pairs);
+}
+
+bool PairCache::findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+  if (!stillValid(input)) return false;
+  filter(input, pairs);
+  return true;
+}
+
+void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
   // Filtered in parallel chunks, concatenated in chunk order: the cached order, sorted, is kept.
   const std::size_t chunks =
       std::min(kFilterChunks, (cached_.size() + kFilterGrain - 1) / kFilterGrain);

@@ -27,9 +27,15 @@ class PairCache {
   void findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                  std::vector<TrianglePair>& pairs);
 
+  /// The same pairs from the cache alone, for other boxes of the same triangles (those of a later
+  /// stage of the substep), when every box lies inside its grown box; otherwise false. Uses
+  /// scratch buffers: not at the same time as findPairs().
+  bool findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
+
   std::size_t rebuilds() const { return rebuilds_; }
 
  private:
+  void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
   bool stillValid(const BroadPhaseInput& input) const;
   void rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input);
 

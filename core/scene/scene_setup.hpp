@@ -113,6 +113,10 @@ struct CollisionSettings {
   /// steps. Off runs the broad phase every step, to compare broad phases themselves.
   bool pairCache = true;
   InitialOverlapMode initialOverlap = InitialOverlapMode::Separate;
+  /// After the paper's response, continuous tests keep every triangle from passing through another
+  /// during the substep (core/collision/failsafe.hpp). Off, or under response "none": the
+  /// paper's pipeline alone.
+  bool failsafe = true;
 };
 
 struct SimulationSettings {

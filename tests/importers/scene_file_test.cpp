@@ -347,7 +347,7 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   const SceneFile scene = parse(R"({
     "settings": {"collisions": {"broadphase": "bvh", "levels": 2, "response": "paper",
                                 "restitution": 0.5, "friction": 0.1,
-                                "initial_overlap": "ignore"}},
+                                "initial_overlap": "ignore", "failsafe": false}},
     "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true}],
     "output": {"contacts": true}
   })");
@@ -358,6 +358,9 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   EXPECT_FLOAT_EQ(collisions.restitution, 0.5f);
   EXPECT_FLOAT_EQ(collisions.friction, 0.1f);
   EXPECT_EQ(collisions.initialOverlap, InitialOverlapMode::Ignore);
+  EXPECT_FALSE(collisions.failsafe);
+  EXPECT_TRUE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
+                  .setup.settings.collisions.failsafe);
   EXPECT_EQ(scene.setup.bodies[0].selfCollision, std::optional<bool>(true));
   EXPECT_TRUE(scene.output.contacts);
   EXPECT_FALSE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
@@ -378,6 +381,8 @@ TEST(SceneFile, CollisionKeyErrorsNameTheKeyPath) {
       sceneError(cat(R"({"settings": {"collisions": {"initial_overlap": "glue"}}, )", body, "}")),
       ::testing::HasSubstr(
           R"(settings.collisions.initial_overlap: expected "separate" or "ignore")"));
+  EXPECT_THAT(sceneError(cat(R"({"settings": {"collisions": {"failsafe": "on"}}, )", body, "}")),
+              ::testing::HasSubstr("settings.collisions.failsafe"));
   EXPECT_THAT(
       sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": 1}]})"),
       ::testing::HasSubstr("bodies[0].self_collision"));

@@ -1,0 +1,403 @@
+#include "core/collision/failsafe.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <numeric>
+
+#include "core/collision/detection.hpp"
+#include "core/collision/geometry.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "core/scene/simulation_state.hpp"
+
+namespace softbake {
+
+namespace {
+
+constexpr std::size_t kChunks = 128;
+
+/// As fractions of the skin: meetings are found within 1/100 of it and left 1/10 of it apart, well
+/// above single precision's rounding at scene scale and well below what the response keeps.
+constexpr double kToleranceOfSkin = 0.01;
+constexpr double kSeparationOfSkin = 0.1;
+
+PointPath path(const CollisionGeometry& geometry, std::span<const Vec3> start,
+               std::span<const Vec3> end, Index v) {
+  return {geometry.vertex(start, v).cast<double>(), geometry.vertex(end, v).cast<double>()};
+}
+
+bool shares(const Triangle& t, Index v) {
+  return t[0] == v || t[1] == v || t[2] == v;
+}
+
+bool lessImpact(const FailsafeImpact& a, const FailsafeImpact& b) {
+  return a.edge != b.edge ? a.edge < b.edge : a.vertex < b.vertex;
+}
+
+bool sameImpact(const FailsafeImpact& a, const FailsafeImpact& b) {
+  return a.edge == b.edge && a.vertex == b.vertex;
+}
+
+/// The skin the tolerances are fractions of; with no skin, a ten-thousandth of the scene's size.
+double failsafeSkin(const SceneTopology& topology) {
+  if (topology.settings.skin > 0) return topology.settings.skin;
+  Box3 bounds;
+  for (const Vec3& x : topology.restPosition) bounds.extend(x);
+  return bounds.isEmpty() ? 1e-3 : 1e-4 * double(bounds.diagonal().norm());
+}
+
+}  // namespace
+
+CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology, FailsafePasses passes)
+    : passes_(passes),
+      tolerance_(kToleranceOfSkin * failsafeSkin(topology)),
+      separation_(kSeparationOfSkin * failsafeSkin(topology)),
+      broadPhase_(makeBroadPhase(BroadPhaseKind::Bvh)) {
+  const CollisionGeometry& geometry = topology.collision;
+  const std::size_t triangles = geometry.triangleVertices.size();
+  const std::size_t vertices = geometry.particleCount + geometry.staticVertex.size();
+  // Ownership: the lowest-numbered triangle holding each vertex and each edge.
+  std::vector<Index> vertexOwner(vertices, ~Index(0));
+  std::vector<std::pair<std::pair<Index, Index>, Index>> edges;
+  edges.reserve(3 * triangles);
+  vertexTriangleStart_.assign(vertices + 1, 0);
+  for (Index t = 0; t < triangles; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = geometry.triangleVertices[t][k],
+                  b = geometry.triangleVertices[t][(k + 1) % 3];
+      vertexOwner[a] = std::min(vertexOwner[a], t);
+      edges.push_back({{std::min(a, b), std::max(a, b)}, t});
+      ++vertexTriangleStart_[a + 1];
+    }
+  std::partial_sum(vertexTriangleStart_.begin(), vertexTriangleStart_.end(),
+                   vertexTriangleStart_.begin());
+  vertexTriangles_.resize(vertexTriangleStart_.back());
+  std::vector<Index> fill(vertexTriangleStart_.begin(), vertexTriangleStart_.end() - 1);
+  for (Index t = 0; t < triangles; ++t)
+    for (Index v : geometry.triangleVertices[t]) vertexTriangles_[fill[v]++] = t;
+  std::sort(edges.begin(), edges.end());
+  owns_.assign(triangles, 0);
+  for (Index t = 0; t < triangles; ++t)
+    for (int k = 0; k < 3; ++k)
+      if (vertexOwner[geometry.triangleVertices[t][k]] == t) owns_[t] |= std::uint8_t(1u << k);
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    if (i > 0 && edges[i].first == edges[i - 1].first) continue;  // sorted: the first is the lowest
+    const Index t = edges[i].second;
+    const Triangle& corners = geometry.triangleVertices[t];
+    for (int k = 0; k < 3; ++k) {
+      const Index a = corners[k], b = corners[(k + 1) % 3];
+      if (std::pair(std::min(a, b), std::max(a, b)) == edges[i].first)
+        owns_[t] |= std::uint8_t(1u << (3 + k));
+    }
+  }
+  moved_.assign(geometry.particleCount, 0);
+  onPlane_.assign(geometry.particleCount, 0);
+  inZone_.assign(geometry.particleCount, 0);
+  zoneParent_.resize(geometry.particleCount);
+  std::iota(zoneParent_.begin(), zoneParent_.end(), Index(0));
+  zoneFixed_.assign(geometry.particleCount, 0);
+  zoneMass_.assign(geometry.particleCount, 0);
+  zoneShift_.assign(geometry.particleCount, Vec3d::Zero());
+  zoneVelocity_.assign(geometry.particleCount, Vec3d::Zero());
+}
+
+void CollisionFailsafe::leaveTangled(const InitialOverlaps& overlaps) {
+  tangled_.clear();
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
+    tangled_.emplace_back(overlap.firstSurface, overlap.secondSurface);
+}
+
+FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology, CollisionDetector& detector,
+                                       std::span<const Vec3> start, SimulationState& state,
+                                       double dt) {
+  FailsafeStats stats;
+  std::fill(moved_.begin(), moved_.end(), 0);
+  std::fill(onPlane_.begin(), onPlane_.end(), 0);
+  const int passes = passes_.impulses + passes_.zones;
+  for (int pass = 0; pass <= passes; ++pass) {
+    ++stats.passes;
+    const bool found = findImpacts(topology, detector, start, state.position, pass > 0);
+    std::fill(moved_.begin(), moved_.end(), 0);
+    if (!found) break;
+    stats.impacts += impacts_.size();
+    if (pass == passes) {
+      // Stage 3: the start had no crossings, so going back to it has none.
+      std::copy(start.begin(), start.begin() + Index(state.position.size()),
+                state.position.begin());
+      std::fill(state.velocity.begin(), state.velocity.end(), Vec3::Zero());
+      ++stats.frozen;
+    } else if (pass < passes_.impulses) {
+      applyImpulses(topology, state, dt);
+    } else {
+      stats.zoneParticles =
+          moveZones(topology, start, state, pass >= passes_.impulses + passes_.translatingZones);
+    }
+    keepAbovePlanes(topology, state, dt);
+  }
+  clearZones();
+  return stats;
+}
+
+bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDetector& detector,
+                                    std::span<const Vec3> start, std::span<const Vec3> end,
+                                    bool onlyMoved) {
+  const CollisionGeometry& geometry = topology.collision;
+  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(tolerance_));
+  // The detector's cached pairs hold this stage's almost always: the response moves particles
+  // far less than the cache's margin. Its own broad phase only when they do not.
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
+  if (!detector.pairCache() || !detector.pairCache()->findCachedPairs(input, pairs_))
+    pairCache_.findPairs(*broadPhase_, input, pairs_);
+  detector.dropIgnoredPairs(geometry, pairs_);
+  dropSurfacePairs(geometry, tangled_, pairs_);
+  const Index particles = geometry.particleCount;
+  const auto triangleMoved = [&](Index t) {
+    for (Index v : geometry.triangleVertices[t])
+      if (v < particles && moved_[v]) return true;
+    return false;
+  };
+  // The box of each vertex's path, grown by the tolerance: most primitives of a candidate pair
+  // are rejected by these before any cubic is formed.
+  const Scalar grow = Scalar(tolerance_);
+  pathBoxes_.resize(particles + geometry.staticVertex.size());
+  tbb::parallel_for(tbb::blocked_range<Index>(0, Index(pathBoxes_.size()), 4096),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index v = range.begin(); v != range.end(); ++v) {
+                        Box3 box(geometry.vertex(start, v));
+                        box.extend(geometry.vertex(end, v));
+                        box.min().array() -= grow;
+                        box.max().array() += grow;
+                        pathBoxes_[v] = box;
+                      }
+                    });
+  const auto pathBox = [&](Index v) -> const Box3& { return pathBoxes_[v]; };
+  const std::size_t chunks = std::min(kChunks, pairs_.size());
+  const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
+  if (chunkImpacts_.size() < chunks) chunkImpacts_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<FailsafeImpact>& found = chunkImpacts_[chunk];
+    found.clear();
+    const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
+    for (std::size_t i = chunk * perChunk; i < stop; ++i) {
+      const Index first = pairs_[i].first, second = pairs_[i].second;
+      if (onlyMoved && !triangleMoved(first) && !triangleMoved(second)) continue;
+      // Within one surface the triangles around a vertex may not all pair (neighbours of the
+      // other triangle are not eligible), so there every primitive is tested and duplicates go.
+      const bool everyPrimitive =
+          geometry.triangleSurface[first] == geometry.triangleSurface[second];
+      const auto vertexFace = [&](Index from, Index face) {
+        const Triangle& f = geometry.triangleVertices[face];
+        for (int k = 0; k < 3; ++k) {
+          const Index p = geometry.triangleVertices[from][k];
+          if ((!everyPrimitive && !(owns_[from] & (1u << k))) || shares(f, p)) continue;
+          if (p >= particles && f[0] >= particles) continue;  // static against static
+          if (!pathBox(p).intersects(boxes_[face])) continue;
+          const std::optional<Impact> impact = vertexFaceImpact(
+              path(geometry, start, end, p), path(geometry, start, end, f[0]),
+              path(geometry, start, end, f[1]), path(geometry, start, end, f[2]), tolerance_);
+          if (impact) found.push_back({{p, f[0], f[1], f[2]}, face, false, *impact});
+        }
+      };
+      vertexFace(first, second);
+      vertexFace(second, first);
+      const Triangle& a = geometry.triangleVertices[first];
+      const Triangle& b = geometry.triangleVertices[second];
+      // The edges each side tests, and their path boxes, each already against the other
+      // triangle's box.
+      const auto testedEdges = [&](Index t, const Triangle& corners, Index other,
+                                   std::array<Box3, 3>& box) {
+        unsigned mask = everyPrimitive ? 7u : unsigned(owns_[t] >> 3);
+        for (int k = 0; k < 3; ++k) {
+          if (!(mask & (1u << k))) continue;
+          box[k] = pathBox(corners[k]);
+          box[k].extend(pathBox(corners[(k + 1) % 3]));
+          if (!box[k].intersects(boxes_[other])) mask &= ~(1u << k);
+        }
+        return mask;
+      };
+      std::array<Box3, 3> boxA, boxB;
+      const unsigned edgesA = testedEdges(first, a, second, boxA);
+      const unsigned edgesB = edgesA ? testedEdges(second, b, first, boxB) : 0u;
+      for (int j = 0; edgesB && j < 3; ++j) {
+        if (!(edgesA & (1u << j))) continue;
+        // Each edge's ends in increasing order, and the edges in order of their first end: a
+        // meeting found from two pairs is then the same computation, bit for bit.
+        const Index p0 = std::min(a[j], a[(j + 1) % 3]), p1 = std::max(a[j], a[(j + 1) % 3]);
+        for (int k = 0; k < 3; ++k) {
+          if (!(edgesB & (1u << k)) || !boxA[j].intersects(boxB[k])) continue;
+          const Index q0 = std::min(b[k], b[(k + 1) % 3]), q1 = std::max(b[k], b[(k + 1) % 3]);
+          if (p0 == q0 || p0 == q1 || p1 == q0 || p1 == q1) continue;
+          std::array<Index, 4> v =
+              p0 < q0 ? std::array{p0, p1, q0, q1} : std::array{q0, q1, p0, p1};
+          const std::optional<Impact> impact = edgeEdgeImpact(
+              path(geometry, start, end, v[0]), path(geometry, start, end, v[1]),
+              path(geometry, start, end, v[2]), path(geometry, start, end, v[3]), tolerance_);
+          if (impact) found.push_back({v, 0, true, *impact});
+        }
+      }
+    }
+  });
+  impacts_.clear();
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+    impacts_.insert(impacts_.end(), chunkImpacts_[chunk].begin(), chunkImpacts_[chunk].end());
+  std::sort(impacts_.begin(), impacts_.end(), lessImpact);
+  impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
+  std::erase_if(impacts_, [&](const FailsafeImpact& impact) {
+    return intersectedAtStart(topology, start, impact);
+  });
+  return !impacts_.empty();
+}
+
+bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
+                                           std::span<const Vec3> start,
+                                           const FailsafeImpact& impact) const {
+  const CollisionGeometry& geometry = topology.collision;
+  const auto around = [&](Index v) {
+    return std::span(vertexTriangles_)
+        .subspan(vertexTriangleStart_[v], vertexTriangleStart_[v + 1] - vertexTriangleStart_[v]);
+  };
+  TrianglePairHits hits;
+  const auto intersect = [&](Index t, Index u) {
+    const Triangle& a = geometry.triangleVertices[t];
+    for (Index v : geometry.triangleVertices[u])
+      if (shares(a, v)) return false;
+    return intersectTrianglePair(geometry.corners(start, t), geometry.corners(start, u), hits);
+  };
+  if (!impact.edge) {
+    for (Index t : around(impact.vertex[0]))
+      if (intersect(t, impact.face)) return true;
+    return false;
+  }
+  for (Index t : around(impact.vertex[0])) {
+    if (!shares(geometry.triangleVertices[t], impact.vertex[1])) continue;
+    for (Index u : around(impact.vertex[2]))
+      if (shares(geometry.triangleVertices[u], impact.vertex[3]) && intersect(t, u)) return true;
+  }
+  return false;
+}
+
+void CollisionFailsafe::applyImpulses(const SceneTopology& topology, SimulationState& state,
+                                      double dt) {
+  const CollisionGeometry& geometry = topology.collision;
+  const Index particles = geometry.particleCount;
+  for (const FailsafeImpact& meeting : impacts_) {
+    const Vec3d& normal = meeting.impact.normal;
+    double gap = 0, resistance = 0;
+    std::array<double, 4> inverseMass{};
+    for (int i = 0; i < 4; ++i) {
+      const Index v = meeting.vertex[i];
+      const double w = meeting.impact.weight[i];
+      gap += w * normal.dot(geometry.vertex(state.position, v).cast<double>());
+      inverseMass[i] = v < particles ? double(topology.inverseMass[v]) : 0.0;
+      resistance += w * w * inverseMass[i];
+    }
+    for (Index v : meeting.vertex)
+      if (v < particles) moved_[v] = 1;  // measured again next pass, resolved or not
+    if (gap >= separation_ || resistance <= 0) continue;
+    const double impulse = (separation_ - gap) / resistance;
+    for (int i = 0; i < 4; ++i) {
+      if (inverseMass[i] == 0) continue;
+      const Vec3d shift = inverseMass[i] * meeting.impact.weight[i] * impulse * normal;
+      const Index v = meeting.vertex[i];
+      state.position[v] += shift.cast<Scalar>();
+      state.velocity[v] += (shift / dt).cast<Scalar>();
+    }
+  }
+}
+
+void CollisionFailsafe::keepAbovePlanes(const SceneTopology& topology, SimulationState& state,
+                                        double dt) {
+  for (Index v = 0; v < Index(moved_.size()); ++v) {
+    if (!moved_[v]) continue;
+    for (const PlaneCollider& plane : topology.planes) {
+      const double height =
+          plane.normal.cast<double>().dot((state.position[v] - plane.point).cast<double>());
+      if (height >= 0) continue;
+      const Vec3d lift = (separation_ - height) * plane.normal.cast<double>();
+      state.position[v] += lift.cast<Scalar>();
+      state.velocity[v] += (lift / dt).cast<Scalar>();
+      onPlane_[v] = 1;
+    }
+  }
+}
+
+Index CollisionFailsafe::zoneOf(Index v) {
+  while (zoneParent_[v] != v) {
+    zoneParent_[v] = zoneParent_[zoneParent_[v]];
+    v = zoneParent_[v];
+  }
+  return v;
+}
+
+std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology, std::span<const Vec3> start,
+                                         SimulationState& state, bool stayAtStart) {
+  const Index particles = topology.collision.particleCount;
+  const auto join = [&](Index v) {
+    if (!inZone_[v]) {
+      inZone_[v] = 1;
+      zoneMembers_.push_back(v);
+    }
+  };
+  for (const FailsafeImpact& meeting : impacts_) {
+    Index root = ~Index(0);
+    bool fixed = false;
+    for (Index v : meeting.vertex) {
+      if (v >= particles) {
+        fixed = true;
+        continue;
+      }
+      join(v);
+      fixed = fixed || topology.inverseMass[v] == 0;
+      const Index r = zoneOf(v);
+      if (root == ~Index(0)) {
+        root = r;
+      } else if (r != root) {
+        // The lower index becomes the root, so zones do not depend on the order of meetings.
+        const Index low = std::min(r, root), high = std::max(r, root);
+        zoneParent_[high] = low;
+        zoneFixed_[low] = zoneFixed_[low] || zoneFixed_[high];
+        root = low;
+      }
+    }
+    if (root != ~Index(0) && fixed) zoneFixed_[root] = 1;
+  }
+  for (Index v : zoneMembers_) {
+    const Index root = zoneOf(v);
+    if (onPlane_[v]) zoneFixed_[root] = 1;
+    zoneMass_[root] = 0;
+    zoneShift_[root].setZero();
+    zoneVelocity_[root].setZero();
+  }
+  for (Index v : zoneMembers_) {
+    const Index root = zoneOf(v);
+    const double m = topology.mass[v];
+    zoneMass_[root] += m;
+    zoneShift_[root] += m * (state.position[v] - start[v]).cast<double>();
+    zoneVelocity_[root] += m * state.velocity[v].cast<double>();
+  }
+  for (Index v : zoneMembers_) {
+    const Index root = zoneOf(v);
+    moved_[v] = 1;
+    if (stayAtStart || zoneFixed_[root] || zoneMass_[root] <= 0) {
+      state.position[v] = start[v];
+      state.velocity[v].setZero();
+    } else {
+      state.position[v] = start[v] + (zoneShift_[root] / zoneMass_[root]).cast<Scalar>();
+      state.velocity[v] = (zoneVelocity_[root] / zoneMass_[root]).cast<Scalar>();
+    }
+  }
+  return zoneMembers_.size();
+}
+
+void CollisionFailsafe::clearZones() {
+  for (Index v : zoneMembers_) {
+    zoneParent_[v] = v;
+    zoneFixed_[v] = 0;
+    inZone_[v] = 0;
+  }
+  zoneMembers_.clear();
+}
+
+}  // namespace softbake

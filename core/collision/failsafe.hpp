@@ -1,0 +1,140 @@
+#pragma once
+/// The last collision stage of a substep: whatever the paper's response (§2.4) and the plane pass
+/// left, no triangle passes through another during the substep (Bridson, Fedkiw & Anderson 2002,
+/// "Robust treatment of collisions, contact and friction for cloth animation", §4 and §7.4).
+///
+/// Why a failsafe after the paper's pipeline rather than instead of it: the paper's response is a
+/// per-particle projection, measured on each contact by itself. In a pile, under a heavy load or
+/// against a thin sheet, one particle's correction pushes another through a third surface, and
+/// nothing measures the result again; the crossings that stay become tangles the edge pushes fight
+/// with large forces, and those blew runs up. Here every particle moves on a straight line from
+/// where the substep started, which was free of crossings, to where the substep left it, and
+/// continuous tests (core/collision/continuous_collision.hpp) find every vertex–face and edge–edge
+/// meeting on the way:
+///
+/// 1. Impulses, in passes: each meeting gets an inelastic, mass-weighted correction along its
+///    normal that leaves the two primitives `separation` apart at the end of the substep (a
+///    displacement, and the velocity change that makes it), applied one after the other in a
+///    fixed order. It conserves momentum; static triangles and pinned particles do not move.
+/// 2. Impact zones, when passes of impulses leave meetings: the particles of every meeting are
+///    merged into zones, and each zone moves as one over the substep, with its mean velocity
+///    (momentum conserved). A translated zone cannot cross itself, zones that meet are merged,
+///    and a zone that holds a pinned particle, a static vertex or a particle on a plane stays
+///    where it started. The zones grow until nothing meets.
+/// 3. Should that still leave meetings after many passes, every particle stays where the substep
+///    started: the state that was free of crossings. Counted, never expected.
+///
+/// Surfaces that intersect each other are not held apart: holding them would hold them in their
+/// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
+/// while any are left, and the paper's response separates them (initial_overlap "separate", over
+/// the first frames); from the frame they are found apart, this stage holds them apart. A meeting
+/// whose own triangles intersected at its start is left alone too, and surfaces ignored under
+/// "ignore" never meet. Otherwise the same pairs as the detector's, the same eligibility
+/// (self-collision only for surfaces that have it on).
+///
+/// Detection runs in parallel over the broad phase's pairs; the meetings are sorted before any is
+/// applied, so the result is the same for any number of threads.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "core/collision/broad_phase.hpp"
+#include "core/collision/continuous_collision.hpp"
+#include "core/collision/initial_overlap.hpp"
+#include "core/collision/pair_cache.hpp"
+#include "core/types.hpp"
+
+namespace softbake {
+
+struct SceneTopology;
+struct SimulationState;
+class CollisionDetector;
+
+struct FailsafeStats {
+  std::size_t impacts = 0;        ///< meetings found over all passes
+  std::size_t zoneParticles = 0;  ///< particles moved as part of an impact zone
+  std::size_t frozen = 0;         ///< substeps that fell back to the start (stage 3)
+  std::size_t passes = 0;         ///< detection passes run
+};
+
+/// One meeting of two primitives: vertices in the order of Impact::weight.
+struct FailsafeImpact {
+  std::array<Index, 4> vertex{};
+  Index face = 0;     ///< the struck triangle of a vertex–face meeting
+  bool edge = false;  ///< an edge–edge meeting
+  Impact impact;
+};
+
+/// How many passes each stage gets. The defaults follow Bridson et al., who use a handful of
+/// impulse passes: most meetings are single and one pass settles them, a second measures what the
+/// first pushed into others. Zones translate with their momentum for a few passes; after that a
+/// zone stays where it started, which always frees it, so the zones stop growing soon after.
+struct FailsafePasses {
+  int impulses = 4;
+  int translatingZones = 8;
+  int zones = 64;  ///< in all, translating ones included
+};
+
+class CollisionFailsafe {
+ public:
+  explicit CollisionFailsafe(const SceneTopology& topology, FailsafePasses passes = {});
+
+  /// Corrects state (positions and velocities) so that no eligible triangles meet on the way from
+  /// `start`, with `dt` the substep. `detector` supplies the surface pairs to ignore.
+  FailsafeStats apply(const SceneTopology& topology, CollisionDetector& detector,
+                      std::span<const Vec3> start, SimulationState& state, double dt);
+
+  /// The surfaces (pairs, or one with itself) that `overlaps` found intersecting now: this stage
+  /// leaves them to the response until the next call, which names those still tangled.
+  void leaveTangled(const InitialOverlaps& overlaps);
+  bool anyTangled() const { return !tangled_.empty(); }
+
+  /// Distance two meeting primitives are left apart, scene units.
+  double separation() const { return separation_; }
+  /// Distance within which two primitives meet.
+  double tolerance() const { return tolerance_; }
+
+ private:
+  bool findImpacts(const SceneTopology& topology, CollisionDetector& detector,
+                   std::span<const Vec3> start, std::span<const Vec3> end, bool onlyMoved);
+  bool intersectedAtStart(const SceneTopology& topology, std::span<const Vec3> start,
+                          const FailsafeImpact& impact) const;
+  void applyImpulses(const SceneTopology& topology, SimulationState& state, double dt);
+  void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
+  /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
+  /// in zones.
+  std::size_t moveZones(const SceneTopology& topology, std::span<const Vec3> start,
+                        SimulationState& state, bool stayAtStart);
+  Index zoneOf(Index v);
+  void clearZones();
+
+  FailsafePasses passes_;
+  double tolerance_, separation_;
+  std::vector<Box3> boxes_;      ///< per collision triangle, over the substep
+  std::vector<Box3> pathBoxes_;  ///< per collision vertex, over the substep
+  std::unique_ptr<BroadPhase> broadPhase_;
+  PairCache pairCache_;
+  std::vector<TrianglePair> pairs_;
+  std::vector<std::pair<Index, Index>> tangled_;  ///< surface pairs, sorted
+  /// Per collision triangle: bit k set when it owns its corner k, bit 3 + k its edge k → k+1. A
+  /// vertex or an edge is tested from the lowest-numbered triangle that holds it, once per pair
+  /// of surfaces (the triangles around it all pair with the same ones).
+  std::vector<std::uint8_t> owns_;
+  std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
+  std::vector<std::vector<FailsafeImpact>> chunkImpacts_;
+  std::vector<FailsafeImpact> impacts_;
+  std::vector<std::uint8_t> moved_;    ///< per particle: moved by this failsafe's latest pass
+  std::vector<std::uint8_t> onPlane_;  ///< per particle: kept above a plane this substep
+  std::vector<Index> zoneParent_;      ///< union–find over particles; zoneParent_[v] == v: a root
+  std::vector<Index> zoneMembers_;     ///< scratch: particles of zones, grouped by root
+  std::vector<std::uint8_t> inZone_;
+  std::vector<std::uint8_t>
+      zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
+  std::vector<double> zoneMass_;  ///< per zone root, and its momentum over the substep:
+  std::vector<Vec3d> zoneShift_, zoneVelocity_;  ///< Σ m·displacement, Σ m·velocity
+};
+
+}  // namespace softbake

@@ -1,0 +1,233 @@
+// The failsafe stage (core/collision/failsafe) on substeps built by hand, far harder than any
+// simulation makes them: bodies thrown deep into each other, through a sheet and into the ground
+// within one substep. Checked by the exact intersection checker, momentum sums, and positions.
+#include "core/collision/failsafe.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstring>
+
+#include "core/collision/detection.hpp"
+#include "core/dynamics/material.hpp"
+#include "tests/core/test_worlds.hpp"
+#include "tests/support/intersection_checker.hpp"
+
+namespace softbake {
+namespace {
+
+constexpr double kDt = 1.0 / 240;
+
+BodySetup ball(const std::string& name, const Vec3f& center, float radius = 0.3f, float mass = 1) {
+  BodySetup body;
+  body.name = name;
+  body.mesh = makeIcosphere(2, radius, center);
+  body.material = *findMaterialPreset("rubber");
+  body.mass = mass;
+  return body;
+}
+
+/// A flat open grid of n×n squares of side `size` centred at `center`, in the xz plane.
+BodySetup sheet(const Vec3f& center, float size, int n) {
+  BodySetup body;
+  body.name = "sheet";
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      body.mesh.positions.push_back(
+          center + Vec3f(size * (float(i) / n - 0.5f), 0, size * (float(j) / n - 0.5f)));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Index a = Index(j * (n + 1) + i), b = a + 1, c = a + Index(n + 1), d = c + 1;
+      body.mesh.triangles.push_back({a, c, b});
+      body.mesh.triangles.push_back({b, c, d});
+    }
+  body.material = *findMaterialPreset("rubber");
+  body.mass = 0.5f;
+  return body;
+}
+
+/// A substep that moves each body by its own displacement, from where the scene starts.
+struct Substep {
+  test::StagedScene scene;
+  CollisionDetector detector;
+  CollisionFailsafe failsafe;
+
+  Substep(const SceneSetup& setup, const std::vector<Vec3>& displacement,
+          FailsafePasses passes = {})
+      : scene(buildSceneTopology(setup)),
+        detector(scene.topology.settings.collisions),
+        failsafe(scene.topology, passes) {
+    for (std::size_t b = 0; b < scene.topology.bodies.size(); ++b) {
+      const Body& body = scene.topology.bodies[b];
+      for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
+        if (scene.topology.inverseMass[p] == 0) continue;
+        scene.state.position[p] += displacement[b];
+        scene.state.velocity[p] = displacement[b] / Scalar(kDt);
+      }
+    }
+  }
+  FailsafeStats apply() {
+    return failsafe.apply(scene.topology, detector, scene.substepStart, scene.state, kDt);
+  }
+  test::IntersectionCount intersections() const {
+    return test::countIntersectingPairs(scene.topology.collision, scene.state.position);
+  }
+  Vec3d momentum() const {
+    Vec3d sum = Vec3d::Zero();
+    for (std::size_t p = 0; p < scene.state.particleCount(); ++p)
+      sum += double(scene.topology.mass[p]) * scene.state.velocity[p].cast<double>();
+    return sum;
+  }
+  double momentumScale() const {
+    double sum = 0;
+    for (std::size_t p = 0; p < scene.state.particleCount(); ++p)
+      sum += double(scene.topology.mass[p]) * scene.state.velocity[p].cast<double>().norm();
+    return sum;
+  }
+  Vec3d centroid(Index body) const {
+    const Body& b = scene.topology.bodies[body];
+    Vec3d sum = Vec3d::Zero();
+    for (Index p = b.firstParticle; p < b.firstParticle + b.particleCount; ++p)
+      sum += scene.state.position[p].cast<double>();
+    return sum / double(b.particleCount);
+  }
+};
+
+SceneSetup noGravity() {
+  SceneSetup setup;
+  setup.settings.gravity.setZero();
+  return setup;
+}
+
+TEST(Failsafe, BallsThrownDeepIntoEachOtherEndApartWithTheirMomentum) {
+  SceneSetup setup = noGravity();
+  setup.bodies = {ball("left", Vec3f(-0.35f, 0, 0)),
+                  ball("right", Vec3f(0.35f, 0.05f, 0), 0.3f, 3)};
+  // Without the stage they would overlap by two thirds of a diameter.
+  Substep step(setup, {Vec3(0.5f, 0, 0), Vec3(-0.1f, 0, 0)});
+  ASSERT_GT(step.intersections().betweenSurfaces, 50u);
+  const Vec3d before = step.momentum();
+  const FailsafeStats stats = step.apply();
+  EXPECT_GT(stats.impacts, 0u);
+  EXPECT_EQ(stats.frozen, 0u);
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  EXPECT_LT((step.momentum() - before).norm(), 1e-5 * step.momentumScale());
+  // Inelastic: the light ball no longer moves into the heavy one.
+  EXPECT_LT(step.centroid(0).x(), step.centroid(1).x());
+}
+
+TEST(Failsafe, ABallCannotPassThroughASheetWithinOneSubstep) {
+  SceneSetup setup = noGravity();
+  setup.bodies = {sheet(Vec3f(0, 0, 0), 1.2f, 12), ball("ball", Vec3f(0, 0.35f, 0))};
+  // The ball's whole diameter and more in one substep: the end state alone shows no crossing.
+  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.8f, 0)});
+  ASSERT_EQ(step.intersections().betweenSurfaces, 0u);
+  ASSERT_LT(step.centroid(1).y(), step.centroid(0).y());
+  step.apply();
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  // The ball stays on the side it came from, carrying the sheet with it.
+  const Body& ballBody = step.scene.topology.bodies[1];
+  const Body& sheetBody = step.scene.topology.bodies[0];
+  Scalar lowestBall = 1e9f, sheetUnderBall = -1e9f;
+  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
+    lowestBall = std::min(lowestBall, step.scene.state.position[p].y());
+  for (Index p = sheetBody.firstParticle; p < sheetBody.firstParticle + sheetBody.particleCount;
+       ++p) {
+    const Vec3& x = step.scene.state.position[p];
+    if (std::abs(x.x()) < 0.05f && std::abs(x.z()) < 0.05f)
+      sheetUnderBall = std::max(sheetUnderBall, x.y());
+  }
+  EXPECT_GT(lowestBall, sheetUnderBall);
+}
+
+TEST(Failsafe, AStackPushedIntoTheGroundStaysAboveIt) {
+  SceneSetup setup = noGravity();
+  setup.planes.push_back(PlaneCollider{});
+  setup.bodies = {ball("lower", Vec3f(0, 0.301f, 0)), ball("upper", Vec3f(0.02f, 0.95f, 0))};
+  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.6f, 0)});
+  step.apply();
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  for (const Vec3& x : step.scene.state.position) EXPECT_GE(x.y(), 0.0f);
+}
+
+TEST(Failsafe, EightBallsMeetingInOnePointEndWithNoCrossings) {
+  SceneSetup setup = noGravity();
+  std::vector<Vec3> displacement;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3f corner(i & 1 ? 0.4f : -0.4f, i & 2 ? 0.4f : -0.4f, i & 4 ? 0.4f : -0.4f);
+    setup.bodies.push_back(ball("ball" + std::to_string(i), corner, 0.3f, 1 + 0.5f * i));
+    displacement.push_back(-1.2f * corner);  // each one's centre past the middle
+  }
+  Substep step(setup, displacement);
+  step.apply();
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+}
+
+// Each stage by itself: impact zones alone, then zones that stay where they started.
+TEST(Failsafe, ImpactZonesAloneSeparateThrownBallsAndKeepTheirMomentum) {
+  SceneSetup setup = noGravity();
+  setup.bodies = {ball("left", Vec3f(-0.35f, 0, 0)),
+                  ball("right", Vec3f(0.35f, 0.05f, 0), 0.3f, 3)};
+  Substep step(setup, {Vec3(0.5f, 0, 0), Vec3(-0.1f, 0, 0)}, {.impulses = 0});
+  const Vec3d before = step.momentum();
+  const FailsafeStats stats = step.apply();
+  EXPECT_GT(stats.zoneParticles, 0u);
+  EXPECT_EQ(stats.frozen, 0u);
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  EXPECT_LT((step.momentum() - before).norm(), 1e-5 * step.momentumScale());
+}
+
+TEST(Failsafe, ZonesThatStayWhereTheyStartedAndTheLastResortEndCrossingFree) {
+  SceneSetup setup = noGravity();
+  std::vector<Vec3> displacement;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3f corner(i & 1 ? 0.4f : -0.4f, i & 2 ? 0.4f : -0.4f, i & 4 ? 0.4f : -0.4f);
+    setup.bodies.push_back(ball("ball" + std::to_string(i), corner));
+    displacement.push_back(-1.2f * corner);
+  }
+  for (const FailsafePasses passes :
+       {FailsafePasses{.impulses = 0, .translatingZones = 0, .zones = 64},
+        FailsafePasses{.impulses = 0, .translatingZones = 0, .zones = 0}}) {
+    Substep step(setup, displacement, passes);
+    const FailsafeStats stats = step.apply();
+    EXPECT_EQ(stats.frozen, passes.zones == 0 ? 1u : 0u);
+    EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  }
+}
+
+TEST(Failsafe, SurfacesIntersectingAtTheStartAreLeftToTheResponse) {
+  SceneSetup setup = noGravity();
+  setup.bodies = {ball("left", Vec3f(-0.25f, 0, 0)), ball("right", Vec3f(0.25f, 0, 0))};
+  Substep step(setup, {Vec3(-0.01f, 0, 0), Vec3(0.01f, 0, 0)});
+  step.failsafe.leaveTangled(findInitialOverlaps(step.scene.topology, step.scene.substepStart));
+  ASSERT_TRUE(step.failsafe.anyTangled());
+  const std::vector<Vec3> moved = step.scene.state.position;
+  const FailsafeStats stats = step.apply();
+  EXPECT_EQ(stats.frozen, 0u);
+  EXPECT_EQ(
+      0, std::memcmp(moved.data(), step.scene.state.position.data(), moved.size() * sizeof(Vec3)));
+}
+
+TEST(Failsafe, GivesTheSameResultForAnyNumberOfThreads) {
+  SceneSetup setup = noGravity();
+  std::vector<Vec3> displacement;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3f at(i & 1 ? 0.4f : -0.4f, 0, i & 2 ? 0.4f : -0.4f);
+    setup.bodies.push_back(ball("ball" + std::to_string(i), at));
+    displacement.push_back(-1.1f * at);
+  }
+  std::vector<std::vector<Vec3>> results;
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Substep step(setup, displacement);
+    step.apply();
+    results.push_back(step.scene.state.position);
+    results.push_back(step.scene.state.velocity);
+  }
+  for (std::size_t i = 2; i < results.size(); ++i)
+    EXPECT_EQ(
+        0, std::memcmp(results[i].data(), results[i % 2].data(), results[i].size() * sizeof(Vec3)));
+}
+
+}  // namespace
+}  // namespace softbake
