@@ -28,6 +28,14 @@ std::string checkSubsteps(const std::string& value) {
   return "expected 'auto' or a whole number >= 1, got '" + value + "'";
 }
 
+/// The options `run` and `bench` both take for reading their input.
+void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
+  command.add_flag("--accept-lossy-import", load.acceptLossyImport,
+                   "import what is left of a mesh file that lost geometry on the way (faces "
+                   "assimp dropped, unused vertices, fewer rows than the header says), with a "
+                   "warning, instead of refusing it");
+}
+
 /// `softbake run`: the options it fills, and the --render/--no-render pair it resolves after
 /// parsing.
 struct RunCommandLine {
@@ -43,6 +51,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
       "format assimp reads, dropped on the ground as a soft body), or nothing for the "
       "built-in default scene.");
   runApp->add_option("input", run.input, "scene .json or mesh file (default: built-in scene)");
+  addLoadOptions(*runApp, run.load);
   runApp->add_option("-o,--out", run.out, "output folder")->capture_default_str();
   runApp->add_option("--frames", run.frames, "number of frames to write")
       ->check(CLI::Range(1, 10000000));
@@ -134,6 +143,7 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ".json, a mesh file or a built-in scene: default, balls1k, balls10k, balls100k, balls1m.");
   benchApp->add_option("scene", bench.input, "scene .json, mesh file or built-in scene name")
       ->required();
+  addLoadOptions(*benchApp, bench.load);
   CLI::Option* benchFrames =
       benchApp->add_option("--frames", bench.frames, "frames to simulate (overrides the scene)")
           ->check(CLI::Range(2, 10000000));

@@ -233,9 +233,10 @@ int run(const RunOptions& options) {
   if (options.threads > 0)
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
 
-  SceneFile scene = loadSceneInput(options.input);
+  SceneFile scene = loadSceneInput(options.input, options.load);
   applyOverrides(options, scene);
   for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
+  printWarnings(scene);
 
   BuildReport report;
   Simulator simulator(buildSceneTopology(scene.setup, &report));

@@ -12,6 +12,7 @@ namespace softbake {
 
 struct RunOptions : SimulationOverrides {
   std::string input;  ///< scene .json, a mesh file, or empty for the built-in default scene
+  SceneLoadOptions load;
   std::filesystem::path out = "out";
   std::optional<int> framePadding;
   bool contacts = false;            ///< write OUT/contacts/<scene>_0001.json …

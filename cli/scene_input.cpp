@@ -1,6 +1,7 @@
 #include "cli/scene_input.hpp"
 
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 #include <system_error>
 
@@ -10,7 +11,7 @@
 
 namespace softbake {
 
-SceneFile loadSceneInput(const std::string& input) {
+SceneFile loadSceneInput(const std::string& input, const SceneLoadOptions& options) {
   if (input.empty()) return defaultScene();
   const std::filesystem::path path(input);
   std::error_code error;
@@ -22,8 +23,14 @@ SceneFile loadSceneInput(const std::string& input) {
   }
   std::string extension = path.extension().string();
   for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".json") return loadSceneFile(path);
-  return sceneFromMeshFile(path);
+  if (extension == ".json") return loadSceneFile(path, options);
+  return sceneFromMeshFile(path, options);
+}
+
+void printWarnings(const SceneFile& scene) {
+  std::fflush(stdout);  // after whatever the command printed before
+  for (const std::string& warning : scene.warnings)
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
 }
 
 void applySimulationOverrides(const SimulationOverrides& overrides, SimulationSettings& settings) {

@@ -4,10 +4,12 @@
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
 #include <new>
+#include <optional>
 #include <unordered_set>
 #include <utility>
 
@@ -15,6 +17,8 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "importers/assimp_log.hpp"
+#include "importers/import_losses.hpp"
 #include "importers/memory_budget.hpp"
 #include "importers/mesh_transform.hpp"
 #include "importers/ply_guard.hpp"
@@ -25,8 +29,8 @@ namespace {
 
 // Welding (core/mesh/weld.hpp) replaces JoinIdenticalVertices, and walking the node tree ourselves
 // replaces PreTransformVertices, which would bake mirrored instances without fixing their winding.
-constexpr unsigned kPostProcess =
-    aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+// Validation runs before these, on the loader's own scene.
+constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_SortByPType;
 
 // A render vertex as importMeshFile stores it: position, normal, UV.
 constexpr double kBytesPerVertex = 2 * sizeof(Vec3f) + sizeof(Vec2f);
@@ -191,19 +195,59 @@ TriangleMesh mergeAll(std::vector<TriangleMesh>& meshes, const std::filesystem::
   return merged;
 }
 
+// Vertices of the file's meshes that no face uses, as the loader returned them: post-processing
+// could split them off or drop them.
+std::size_t unusedVertices(const aiScene& scene) {
+  std::size_t unused = 0;
+  std::vector<char> used;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    used.assign(mesh.mNumVertices, 0);
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f)
+      for (unsigned i = 0; i < mesh.mFaces[f].mNumIndices; ++i)
+        if (mesh.mFaces[f].mIndices[i] < mesh.mNumVertices) used[mesh.mFaces[f].mIndices[i]] = 1;
+    unused += std::size_t(std::count(used.begin(), used.end(), 0));
+  }
+  return unused;
+}
+
+std::size_t vertexCount(const aiScene& scene) {
+  std::size_t vertices = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) vertices += scene.mMeshes[m]->mNumVertices;
+  return vertices;
+}
+
 ImportedMeshes importWithAssimp(const std::filesystem::path& path,
                                 const MeshImportOptions& options) {
   const std::string file = path.string();
-  // No Assimp::DefaultLogger is ever created, so assimp logs into its NullLogger: nothing of it
-  // reaches stdout or stderr.
+  const AssimpLogCapture log;
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(file, kPostProcess);
+  // Validation only, so the scene can be inspected as the loader made it before post-processing.
+  const aiScene* scene = importer.ReadFile(file, aiProcess_ValidateDataStructure);
   if (!scene) {
     const std::string why = importer.GetErrorString();
     if (why.find("No suitable reader found") != std::string::npos)
       throw Error(cat(file, ": unsupported format (assimp: ", why, ")"));
     throw Error(cat(file, ": cannot import (assimp: ", why, ")"));
   }
+  std::vector<std::string> losses;
+  if (std::optional<std::string> loss =
+          unusedVertexLoss(unusedVertices(*scene), vertexCount(*scene)))
+    losses.push_back(std::move(*loss));
+  scene = importer.ApplyPostProcessing(kPostProcess);
+  if (!scene) throw Error(cat(file, ": cannot import (assimp: ", importer.GetErrorString(), ")"));
+
+  // A message that says what was lost is told once, as a loss.
+  std::vector<AssimpMessage> others;
+  for (const AssimpMessage& message : log.messages()) {
+    if (std::optional<std::string_view> lost = geometryLostIn(message.text))
+      losses.push_back(cat(*lost, " (assimp: ", message.text, ")"));
+    else
+      others.push_back(message);
+  }
+  ImportedMeshes result;
+  result.warnings = describeAssimpMessages(file, others, log.unkept());
+  settleLosses(file, losses, options.acceptLossy, result.warnings);
 
   const std::string stem = path.stem().string();
   const std::vector<MeshInstance> instances = collectInstances(*scene, stem);
@@ -215,7 +259,6 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path,
   if (options.mergeMeshes) bytes *= 2;
   requireMemory(path, bytes, cat("importing ", instances.size(), " mesh instances"));
 
-  ImportedMeshes result;
   DroppedPrimitives dropped;
   for (const MeshInstance& instance : instances) {
     TriangleMesh mesh = toTriangleMesh(instance, dropped);

@@ -28,10 +28,12 @@ std::string threeDigits(double x) {
 
 }  // namespace
 
-SceneFile sceneFromMeshFile(const std::filesystem::path& path) {
-  ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false});
+SceneFile sceneFromMeshFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
+  ImportedMeshes imported =
+      importMeshFile(path, {.mergeMeshes = false, .acceptLossy = options.acceptLossyImport});
   SceneFile scene;
   scene.notes = std::move(imported.notes);
+  scene.warnings = std::move(imported.warnings);
   scene.setup.name = fileSafeSceneName(path.stem().string());
   scene.setup.settings = SimulationSettings();
   scene.setup.settings.fps = 24;

@@ -58,8 +58,9 @@ std::string sceneName(const JsonValue& value) {
 
 class SceneParser {
  public:
-  SceneParser(std::string_view source, const std::filesystem::path& baseDirectory)
-      : source_(source), baseDirectory_(baseDirectory) {}
+  SceneParser(std::string_view source, const std::filesystem::path& baseDirectory,
+              const SceneLoadOptions& options)
+      : source_(source), baseDirectory_(baseDirectory), options_(options) {}
 
   SceneFile parse(const nlohmann::json& json) {
     const JsonObject root =
@@ -88,7 +89,7 @@ class SceneParser {
  private:
   void parseSettings(const JsonValue& value) {
     const JsonObject object = value.object({"fps", "frames", "integrator", "substeps", "gravity",
-                                            "units", "max_speed", "skin", "collisions"});
+                                            "units", "max_speed", "skin", "collisions", "import"});
     SimulationSettings& settings = scene_.setup.settings;
     if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
     if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
@@ -110,6 +111,14 @@ class SceneParser {
       settings.maxSpeed = Scalar(maxSpeed->numberAbove(0));
     if (auto skin = object.find("skin")) settings.skin = Scalar(skin->numberAtLeast(0));
     if (auto collisions = object.find("collisions")) parseCollisions(*collisions);
+    if (auto import = object.find("import")) parseImport(*import);
+  }
+
+  // Before the bodies, whose meshes it applies to.
+  void parseImport(const JsonValue& value) {
+    const JsonObject object = value.object({"accept_lossy"});
+    if (auto accept = object.find("accept_lossy"))
+      options_.acceptLossyImport = options_.acceptLossyImport || accept->boolean();
   }
 
   void parseCollisions(const JsonValue& value) {
@@ -149,11 +158,14 @@ class SceneParser {
         value.fail(cat("mesh file not found: ", resolved.string()));
       ImportedMeshes imported;
       try {
-        imported = importMeshFile(resolved, {.mergeMeshes = merge});
+        imported = importMeshFile(
+            resolved, {.mergeMeshes = merge, .acceptLossy = options_.acceptLossyImport});
       } catch (const Error& importError) {
         value.fail(importError.what());
       }
       for (std::string& note : imported.notes) scene_.notes.push_back(std::move(note));
+      for (std::string& warning : imported.warnings)
+        scene_.warnings.push_back(cat(source_, ": ", value.path(), ": ", warning));
       return std::move(imported.meshes);
     }
     if (value.isObject()) {
@@ -375,19 +387,20 @@ class SceneParser {
 
   std::string_view source_;
   std::filesystem::path baseDirectory_;
+  SceneLoadOptions options_;
   SceneFile scene_;
 };
 
 }  // namespace
 
 SceneFile parseScene(const nlohmann::json& json, std::string_view source,
-                     const std::filesystem::path& baseDirectory) {
-  return SceneParser(source, baseDirectory).parse(json);
+                     const std::filesystem::path& baseDirectory, const SceneLoadOptions& options) {
+  return SceneParser(source, baseDirectory, options).parse(json);
 }
 
-SceneFile loadSceneFile(const std::filesystem::path& path) {
+SceneFile loadSceneFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
   const nlohmann::json json = readJsonFile(path);
-  return parseScene(json, path.string(), path.parent_path());
+  return parseScene(json, path.string(), path.parent_path(), options);
 }
 
 std::string fileSafeSceneName(std::string name) {
