@@ -22,6 +22,7 @@
 #include "importers/memory_budget.hpp"
 #include "importers/mesh_transform.hpp"
 #include "importers/ply_guard.hpp"
+#include "importers/ply_import.hpp"
 
 namespace softbake {
 
@@ -35,8 +36,6 @@ constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_SortByPType;
 // A render vertex as importMeshFile stores it: position, normal, UV.
 constexpr double kBytesPerVertex = 2 * sizeof(Vec3f) + sizeof(Vec2f);
 constexpr double kBytesPerTriangle = sizeof(Triangle);
-// assimp 5.2's PLY reader keeps every value of every row in its own std::vector of 4-byte values.
-constexpr double kPlyBytesPerValue = sizeof(std::vector<float>) + 4;
 
 struct MeshInstance {
   const aiMesh* mesh;
@@ -217,8 +216,26 @@ std::size_t vertexCount(const aiScene& scene) {
   return vertices;
 }
 
-ImportedMeshes importWithAssimp(const std::filesystem::path& path,
-                                const MeshImportOptions& options) {
+std::size_t faceCount(const aiScene& scene) {
+  std::size_t faces = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) faces += scene.mMeshes[m]->mNumFaces;
+  return faces;
+}
+
+// One mesh, or all merged into one, or each named apart.
+void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& options,
+                   ImportedMeshes& result) {
+  if (options.mergeMeshes) {
+    TriangleMesh merged = mergeAll(result.meshes, path, result.notes);
+    result.meshes.clear();
+    result.meshes.push_back(std::move(merged));
+  } else {
+    makeNamesUnique(result.meshes);
+  }
+}
+
+ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImportOptions& options,
+                                const PlyPreparation* ply) {
   const std::string file = path.string();
   const AssimpLogCapture log;
   Assimp::Importer importer;
@@ -231,6 +248,10 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path,
     throw Error(cat(file, ": cannot import (assimp: ", why, ")"));
   }
   std::vector<std::string> losses;
+  if (ply) {
+    losses = ply->losses;
+    compareWithHeader(ply->header, vertexCount(*scene), faceCount(*scene), losses);
+  }
   if (std::optional<std::string> loss =
           unusedVertexLoss(unusedVertices(*scene), vertexCount(*scene)))
     losses.push_back(std::move(*loss));
@@ -275,23 +296,8 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path,
       throw Error(cat(file, ": no triangles (the file holds only points and lines)"));
     throw Error(cat(file, ": no triangles (the file holds no meshes)"));
   }
-  if (options.mergeMeshes) {
-    TriangleMesh merged = mergeAll(result.meshes, path, result.notes);
-    result.meshes.clear();
-    result.meshes.push_back(std::move(merged));
-  } else {
-    makeNamesUnique(result.meshes);
-  }
+  arrangeMeshes(path, options, result);
   return result;
-}
-
-// assimp's PLY reader trusts the header (see ply_guard.hpp), and allocates for its counts.
-void guardPly(const std::filesystem::path& path) {
-  const PlyHeader header = checkPlyFile(path);
-  double values = 0;
-  for (const PlyElement& element : header.elements)
-    values += double(element.count) * double(element.propertyCount);
-  requireMemory(path, values * kPlyBytesPerValue, "reading the PLY file");
 }
 
 }  // namespace
@@ -312,8 +318,11 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
   try {
     std::string extension = path.extension().string();
     for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (extension == ".ply" || isPlyFile(path)) guardPly(path);
-    return importWithAssimp(path, options);
+    std::optional<PlyPreparation> ply;
+    if (extension == ".ply" || isPlyFile(path)) {
+      ply = preparePly(path);
+    }
+    return importWithAssimp(path, options, ply ? &*ply : nullptr);
   } catch (const std::bad_alloc&) {
     throw Error(
         cat(file, ": mesh too large for this machine: ran out of memory while importing it"));

@@ -1,0 +1,31 @@
+#pragma once
+/// What softbake does with a PLY file before assimp: the header check (ply_guard.hpp) and the
+/// rows the data really holds (ply_data.hpp).
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "importers/ply_guard.hpp"
+
+namespace softbake {
+
+struct PlyPreparation {
+  PlyHeader header;
+  /// Geometry the file lacks: "the header declares 12 faces, the file holds 6".
+  std::vector<std::string> losses;
+};
+
+/// Checks the header, the memory assimp would need for it and the rows the data holds. Throws
+/// softbake::Error naming the file for a bad header, a binary file cut short (assimp 5.2 would
+/// read past its end); an ascii file cut short is a loss, since assimp pads it with copies of its
+/// last row.
+PlyPreparation preparePly(const std::filesystem::path& path);
+
+/// Adds a loss when assimp's scene, before post-processing, has fewer vertices or faces than the
+/// header declares.
+void compareWithHeader(const PlyHeader& header, std::size_t vertices, std::size_t faces,
+                       std::vector<std::string>& losses);
+
+}  // namespace softbake
