@@ -300,6 +300,29 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
   return result;
 }
 
+// A PLY file softbake read itself: what assimp's path checks, on softbake's mesh.
+ImportedMeshes importPlyMesh(const std::filesystem::path& path, const MeshImportOptions& options,
+                             PlyPreparation& ply) {
+  const std::string file = path.string();
+  TriangleMesh& mesh = *ply.mesh;
+  std::vector<char> used(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (Index v : t) used[v] = 1;
+  std::vector<std::string> losses = std::move(ply.losses);
+  if (std::optional<std::string> loss = unusedVertexLoss(
+          std::size_t(std::count(used.begin(), used.end(), 0)), mesh.positions.size()))
+    losses.push_back(std::move(*loss));
+  ImportedMeshes result;
+  result.notes = std::move(ply.notes);
+  settleLosses(file, losses, options.acceptLossy, result.warnings);
+  if (mesh.triangles.empty()) throw Error(cat(file, ": no triangles"));
+  mesh.name = path.stem().string();
+  requireFinite(path, mesh);
+  result.meshes.push_back(std::move(mesh));
+  arrangeMeshes(path, options, result);
+  return result;
+}
+
 }  // namespace
 
 ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImportOptions& options) {
@@ -321,6 +344,7 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
     std::optional<PlyPreparation> ply;
     if (extension == ".ply" || isPlyFile(path)) {
       ply = preparePly(path);
+      if (ply->mesh) return importPlyMesh(path, options, *ply);
     }
     return importWithAssimp(path, options, ply ? &*ply : nullptr);
   } catch (const std::bad_alloc&) {

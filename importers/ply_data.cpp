@@ -118,8 +118,10 @@ class Cursor {
 
 class RowWalker {
  public:
-  RowWalker(const PlyHeader& header, std::string_view data, std::string_view source)
-      : cursor_(header.format, data), source_(source) {}
+  // Counting keeps no list items: a lying list length could otherwise hold eight times the
+  // file's size in doubles.
+  RowWalker(const PlyHeader& header, std::string_view data, std::string_view source, bool keepLists)
+      : cursor_(header.format, data), source_(source), keepLists_(keepLists) {}
 
   Cursor& cursor() { return cursor_; }
 
@@ -139,11 +141,10 @@ class RowWalker {
       if (!value(element, index, property, property.countType, length)) return false;
       if (length < 0)
         fail(element, index, property, cat("negative list length ", std::int64_t(length)));
-      // Bounded by the data: a lying length runs out of bytes before it runs out of memory.
       for (double i = 0; i < length; ++i) {
         double item = 0;
         if (!value(element, index, property, property.type, item)) return false;
-        row_.lists[p].push_back(item);
+        if (keepLists_) row_.lists[p].push_back(item);
       }
     }
     return true;
@@ -175,6 +176,7 @@ class RowWalker {
 
   Cursor cursor_;
   std::string_view source_;
+  bool keepLists_;
   PlyRow row_;
 };
 
@@ -183,7 +185,7 @@ class RowWalker {
 std::vector<std::uint64_t> countPlyRows(const PlyHeader& header, std::string_view data,
                                         std::string_view source) {
   std::vector<std::uint64_t> counts(header.elements.size(), 0);
-  RowWalker walker(header, data, source);
+  RowWalker walker(header, data, source, /*keepLists=*/false);
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
     if (walker.cursor().binary() && element.fixedSize && element.minRowBytes > 0) {
@@ -199,7 +201,7 @@ std::vector<std::uint64_t> countPlyRows(const PlyHeader& header, std::string_vie
 
 void readPlyRows(const PlyHeader& header, std::string_view data, std::string_view source,
                  const std::function<void(std::size_t, std::uint64_t, const PlyRow&)>& onRow) {
-  RowWalker walker(header, data, source);
+  RowWalker walker(header, data, source, /*keepLists=*/true);
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
     for (std::uint64_t r = 0; r < element.count; ++r) {

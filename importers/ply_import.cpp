@@ -4,6 +4,7 @@
 #include "core/text.hpp"
 #include "importers/memory_budget.hpp"
 #include "importers/ply_data.hpp"
+#include "importers/ply_strips.hpp"
 
 namespace softbake {
 
@@ -50,6 +51,16 @@ PlyPreparation preparePly(const std::filesystem::path& path) {
     result.losses.push_back(shortfall);
   }
 
+  if (hasTriangleStrips(header)) {
+    PlyStripMesh strips = readPlyStripMesh(header, data, file);
+    for (std::string& loss : strips.losses) result.losses.push_back(std::move(loss));
+    result.notes.push_back(cat(file, ": read ", strips.stripTriangles,
+                               " triangles from its triangle strips (assimp 5.2 reads one)"));
+    if (strips.pointsAndLines > 0)
+      result.notes.push_back(cat(file, ": ignored ", strips.pointsAndLines,
+                                 " faces of fewer than 3 corners (only triangles are simulated)"));
+    result.mesh = std::move(strips.mesh);
+  }
   return result;
 }
 

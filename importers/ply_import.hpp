@@ -1,12 +1,15 @@
 #pragma once
-/// What softbake does with a PLY file before assimp: the header check (ply_guard.hpp) and the
-/// rows the data really holds (ply_data.hpp).
+/// What softbake does with a PLY file before and instead of assimp: the header check
+/// (ply_guard.hpp), the rows the data really holds (ply_data.hpp), and triangle strips, which it
+/// reads itself (ply_strips.hpp).
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/mesh/triangle_mesh.hpp"
 #include "importers/ply_guard.hpp"
 
 namespace softbake {
@@ -15,12 +18,16 @@ struct PlyPreparation {
   PlyHeader header;
   /// Geometry the file lacks: "the header declares 12 faces, the file holds 6".
   std::vector<std::string> losses;
+  /// The file's mesh when softbake read it itself (its faces are triangle strips); otherwise
+  /// assimp reads it.
+  std::optional<TriangleMesh> mesh;
+  std::vector<std::string> notes;
 };
 
 /// Checks the header, the memory assimp would need for it and the rows the data holds. Throws
 /// softbake::Error naming the file for a bad header, a binary file cut short (assimp 5.2 would
-/// read past its end); an ascii file cut short is a loss, since assimp pads it with copies of its
-/// last row.
+/// read past its end), or strips it cannot read; an ascii file cut short is a loss, since assimp
+/// pads it with copies of its last row.
 PlyPreparation preparePly(const std::filesystem::path& path);
 
 /// Adds a loss when assimp's scene, before post-processing, has fewer vertices or faces than the
