@@ -1,7 +1,9 @@
 // The softbake command.
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <cstdio>
+#include <string>
 
 #include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
@@ -34,6 +36,24 @@ void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
                    "import what is left of a mesh file that lost geometry on the way (faces "
                    "assimp dropped, unused vertices, fewer rows than the header says), with a "
                    "warning, instead of refusing it");
+  const softbake::ImportLimits defaults;
+  command
+      .add_option("--max-vertices", load.maxVertices,
+                  "most vertices one mesh file may bring in (default " +
+                      std::to_string(defaults.maxVertices) + ")")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
+  command
+      .add_option("--max-faces", load.maxFaces,
+                  "most triangles one mesh file may bring in (default " +
+                      std::to_string(defaults.maxFaces) + ")")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
+  command
+      .add_option("--max-import-memory", load.maxImportMemoryMib,
+                  "most memory one mesh file's import may take, MiB (default: all of it)")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 40));
+  command.add_option("--max-bodies", load.maxBodies, "most bodies the scene may have")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
 }
 
 /// `softbake run`: the options it fills, and the --render/--no-render pair it resolves after
@@ -107,6 +127,12 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
+  runApp
+      ->add_option("--max-output-gib", run.maxOutputGib,
+                   "refuse, before any work, a run whose frames would take more than this many "
+                   "GiB on disk (estimated)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   return runApp;
 }

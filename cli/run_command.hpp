@@ -26,6 +26,7 @@ struct RunOptions : SimulationOverrides {
   std::optional<std::string> vdbCompression;  ///< "zip", "blosc" or "none"
   int threads = 0;                            ///< 0: all cores
   bool quiet = false;
+  double maxOutputGib = 1024;  ///< refuse runs whose frames would take more, roughly
 };
 
 /// Runs the job; returns the process exit code. Errors are printed, never thrown.

@@ -19,7 +19,6 @@
 #include "core/text.hpp"
 #include "importers/assimp_log.hpp"
 #include "importers/import_losses.hpp"
-#include "importers/memory_budget.hpp"
 #include "importers/mesh_transform.hpp"
 #include "importers/ply_guard.hpp"
 #include "importers/ply_import.hpp"
@@ -272,13 +271,17 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
 
   const std::string stem = path.stem().string();
   const std::vector<MeshInstance> instances = collectInstances(*scene, stem);
-  double bytes = 0;
-  for (const MeshInstance& instance : instances)
-    bytes += instance.mesh->mNumVertices * kBytesPerVertex +
-             instance.mesh->mNumFaces * kBytesPerTriangle;
+  std::uint64_t vertices = 0, faces = 0;
+  for (const MeshInstance& instance : instances) {
+    vertices += instance.mesh->mNumVertices;
+    faces += instance.mesh->mNumFaces;
+  }
+  requireWithinLimits(path, vertices, faces, options.limits);
+  double bytes = double(vertices) * kBytesPerVertex + double(faces) * kBytesPerTriangle;
   // Merging copies everything once more.
   if (options.mergeMeshes) bytes *= 2;
-  requireMemory(path, bytes, cat("importing ", instances.size(), " mesh instances"));
+  requireImportMemory(path, bytes, cat("importing ", instances.size(), " mesh instances"),
+                      options.limits);
 
   DroppedPrimitives dropped;
   for (const MeshInstance& instance : instances) {
@@ -316,6 +319,7 @@ ImportedMeshes importPlyMesh(const std::filesystem::path& path, const MeshImport
   result.notes = std::move(ply.notes);
   settleLosses(file, losses, options.acceptLossy, result.warnings);
   if (mesh.triangles.empty()) throw Error(cat(file, ": no triangles"));
+  requireWithinLimits(path, mesh.positions.size(), mesh.triangles.size(), options.limits);
   mesh.name = path.stem().string();
   requireFinite(path, mesh);
   result.meshes.push_back(std::move(mesh));
@@ -336,14 +340,14 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
   const std::uintmax_t fileSize = std::filesystem::file_size(path, error);
   if (error) throw Error(cat(file, ": cannot read the file (", error.message(), ")"));
   // assimp reads the whole file into memory before parsing it.
-  requireMemory(path, double(fileSize), "reading the file");
+  requireImportMemory(path, double(fileSize), "reading the file", options.limits);
 
   try {
     std::string extension = path.extension().string();
     for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
     std::optional<PlyPreparation> ply;
     if (extension == ".ply" || isPlyFile(path)) {
-      ply = preparePly(path);
+      ply = preparePly(path, options.limits);
       if (ply->mesh) return importPlyMesh(path, options, *ply);
     }
     return importWithAssimp(path, options, ply ? &*ply : nullptr);

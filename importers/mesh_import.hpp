@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
+#include "importers/import_limits.hpp"
 
 namespace softbake {
 
@@ -15,6 +16,7 @@ struct MeshImportOptions {
   /// Import what is left of a file that lost geometry on the way (import_losses.hpp), with a
   /// warning, instead of refusing it.
   bool acceptLossy = false;
+  ImportLimits limits{};
 };
 
 struct ImportedMeshes {
@@ -29,8 +31,8 @@ struct ImportedMeshes {
 
 /// Throws softbake::Error, naming the file, when it is missing, not a format assimp reads,
 /// malformed (including PLY headers that would crash assimp 5.2), has no triangles, has
-/// non-finite coordinates, lost geometry on the way (unless options.acceptLossy), or is too large
-/// for this machine's memory.
+/// non-finite coordinates, lost geometry on the way (unless options.acceptLossy), or is above
+/// options.limits or too large for this machine's memory.
 ImportedMeshes importMeshFile(const std::filesystem::path& path,
                               const MeshImportOptions& options = {});
 

@@ -29,8 +29,13 @@ std::string threeDigits(double x) {
 }  // namespace
 
 SceneFile sceneFromMeshFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
-  ImportedMeshes imported =
-      importMeshFile(path, {.mergeMeshes = false, .acceptLossy = options.acceptLossyImport});
+  ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false,
+                                                  .acceptLossy = options.acceptLossyImport,
+                                                  .limits = options.importLimits()});
+  if (imported.meshes.size() > options.maxBodies)
+    throw Error(cat(path.string(), ": ", imported.meshes.size(),
+                    " meshes make as many bodies, above the limit of ", options.maxBodies,
+                    " (--max-bodies raises it)"));
   SceneFile scene;
   scene.notes = std::move(imported.notes);
   scene.warnings = std::move(imported.warnings);

@@ -2,7 +2,6 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "importers/memory_budget.hpp"
 #include "importers/ply_data.hpp"
 #include "importers/ply_strips.hpp"
 
@@ -27,15 +26,17 @@ std::uint64_t declared(const PlyHeader& header, std::string_view name) {
 
 }  // namespace
 
-PlyPreparation preparePly(const std::filesystem::path& path) {
+PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits& limits) {
   const std::string file = path.string();
   PlyPreparation result;
   result.header = checkPlyFile(path);
   const PlyHeader& header = result.header;
+  // Before anything is allocated for them: the header may lie.
+  requireWithinLimits(path, declared(header, "vertex"), declared(header, "face"), limits);
   double values = 0;
   for (const PlyElement& element : header.elements)
     values += double(element.count) * double(element.propertyCount);
-  requireMemory(path, values * kPlyBytesPerValue, "reading the PLY file");
+  requireImportMemory(path, values * kPlyBytesPerValue, "reading the PLY file", limits);
 
   const std::string bytes = readWholeFile(file);
   const std::string_view data = std::string_view(bytes).substr(

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
+#include "importers/import_limits.hpp"
 #include "importers/ply_guard.hpp"
 
 namespace softbake {
@@ -24,11 +25,12 @@ struct PlyPreparation {
   std::vector<std::string> notes;
 };
 
-/// Checks the header, the memory assimp would need for it and the rows the data holds. Throws
-/// softbake::Error naming the file for a bad header, a binary file cut short (assimp 5.2 would
+/// Checks the header, its counts against `limits`, the memory assimp would need for it and the
+/// rows the data holds. Throws softbake::Error naming the file for a bad header, counts above the
+/// limits, a binary file cut short (assimp 5.2 would
 /// read past its end), or strips it cannot read; an ascii file cut short is a loss, since assimp
 /// pads it with copies of its last row.
-PlyPreparation preparePly(const std::filesystem::path& path);
+PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits& limits);
 
 /// Adds a loss when assimp's scene, before post-processing, has fewer vertices or faces than the
 /// header declares.

@@ -2,6 +2,7 @@
 /// Scene files (JSON) and the two scenes that need no file: the built-in default scene and a single
 /// mesh dropped on the ground. All three produce the same SceneFile.
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "core/scene/scene_setup.hpp"
+#include "importers/import_limits.hpp"
 
 namespace softbake {
 
@@ -50,6 +52,14 @@ struct SceneLoadOptions {
   /// Import what is left of mesh files that lost geometry, with a warning (MeshImportOptions).
   /// A scene's `settings.import.accept_lossy` turns it on too.
   bool acceptLossyImport = false;
+  /// Caps per mesh file (ImportLimits); unset ones are the scene's `settings.import` values, or
+  /// the defaults.
+  std::optional<std::uint64_t> maxVertices{}, maxFaces{}, maxImportMemoryMib{};
+  /// `scene` (the defaults, or a scene's settings.import) with the caps set here written over it.
+  ImportLimits importLimits(ImportLimits scene = {}) const;
+  /// Bodies a scene may have, counted before its meshes are read and again as files split into
+  /// several. Only the command line sets it: it bounds what a scene may ask for.
+  std::size_t maxBodies = 10'000;
 };
 
 /// Loads and validates a scene file. Mesh paths are relative to the scene file's folder. Throws

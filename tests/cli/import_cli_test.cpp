@@ -102,4 +102,42 @@ TEST_F(ImportCliTest, BenchRefusesTheLossTooUnlessAccepted) {
   EXPECT_EQ(accepted.exitCode, 0) << accepted.output;
 }
 
+TEST_F(ImportCliTest, AFileAboveTheFaceCapIsRefusedNamingTheFileAndTheFlag) {
+  const fs::path box = importData("box.gltf");
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run " + quoted(box.string()) + " --max-faces 11 --no-render -o " +
+                                 quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find(box.string() + ": 12 faces, above the limit of 11 per file "
+                                           "(--max-faces"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(filesUnder(out), 0u);
+}
+
+TEST_F(ImportCliTest, ARunWhoseFramesWouldNotFitTheOutputBoundIsRefusedBeforeAnyWork) {
+  const fs::path out = folder_ / "out";
+  // The box's OBJ frames are about a kilobyte each: a million of them are about a gigabyte.
+  const Result run =
+      runSoftbake("run " + quoted(importData("box.gltf").string()) +
+                  " --frames 1000000 --max-output-gib 0.5 --no-render -o " + quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("softbake: error: scene 'box': 1000000 frames of about "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("above the limit of 512.0 MiB (--max-output-gib raises it)"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(run.output.find("substeps:"), std::string::npos) << "work started:\n" << run.output;
+  EXPECT_EQ(filesUnder(out), 0u);
+}
+
+TEST_F(ImportCliTest, TooManyBodiesAreRefusedForBuiltInScenesToo) {
+  const Result run = runSoftbake("bench balls1k --frames 2 --max-bodies 3");
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("scene 'balls1k': 4 bodies, above the limit of 3 (--max-bodies"),
+            std::string::npos)
+      << run.output;
+}
+
 }  // namespace
