@@ -4,11 +4,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <assimp/DefaultLogger.hpp>
+
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "importers/assimp_log.hpp"
 #include "importers/import_losses.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
@@ -146,6 +149,32 @@ TEST(LossyImport, EachThreadHearsOnlyItsOwnFilesMessages) {
   goodThread.join();
   EXPECT_TRUE(badOk);
   EXPECT_TRUE(goodOk);
+}
+
+TEST(AssimpLog, RepeatsAreToldOnceWithTheirCountAndTheListEndsWithHowManyMore) {
+  std::vector<std::string> lines;
+  {
+    const AssimpLogCapture capture;
+    for (int i = 0; i < 3; ++i) Assimp::DefaultLogger::get()->warn("same again");
+    Assimp::DefaultLogger::get()->info("narration is not kept");
+    for (int i = 0; i < 4; ++i) Assimp::DefaultLogger::get()->error(cat("error ", i).c_str());
+    lines = describeAssimpMessages("f.obj", capture.messages(), capture.unkept(), 3);
+  }
+  EXPECT_THAT(lines,
+              ElementsAre("f.obj: assimp: same again (3 times)", "f.obj: assimp error: error 0",
+                          "f.obj: assimp error: error 1", "f.obj: assimp: 2 more messages"));
+}
+
+TEST(AssimpLog, AnInnerCaptureTakesTheMessagesWhileItIsOpen) {
+  const AssimpLogCapture outer;
+  {
+    const AssimpLogCapture inner;
+    Assimp::DefaultLogger::get()->warn("inner");
+    EXPECT_EQ(inner.messages().size(), 1u);
+  }
+  Assimp::DefaultLogger::get()->warn("outer");
+  ASSERT_EQ(outer.messages().size(), 1u);
+  EXPECT_EQ(outer.messages()[0].text, "outer");
 }
 
 TEST(LossyImport, AssimpMessagesThatLoseGeometryAreRecognised) {
