@@ -228,7 +228,8 @@ int bench(const BenchOptions& options) {
   const int threads =
       int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
-  const SceneFile loaded = loadSceneInput(options.input);
+  const SceneFile loaded = loadSceneInput(options.input, options.load);
+  printWarnings(loaded);
   std::vector<std::optional<std::string>> broadPhases(options.broadPhases.begin(),
                                                       options.broadPhases.end());
   if (broadPhases.empty()) broadPhases.emplace_back();  // the scene's

@@ -22,7 +22,8 @@ namespace softbake {
 
 /// The overrides' `broadPhase` is unused: `broadPhases` lists the ones to run.
 struct BenchOptions : SimulationOverrides {
-  std::string input;                     ///< scene .json, mesh file or built-in scene name
+  std::string input;  ///< scene .json, mesh file or built-in scene name
+  SceneLoadOptions load;
   std::optional<long> steps;             ///< exact substep count instead of whole frames
   std::vector<std::string> broadPhases;  ///< empty: the scene's
   long warmupSteps = 0;                  ///< steps simulated before measuring, not reported

@@ -1,7 +1,9 @@
 // The softbake command.
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <cstdio>
+#include <string>
 
 #include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
@@ -28,6 +30,32 @@ std::string checkSubsteps(const std::string& value) {
   return "expected 'auto' or a whole number >= 1, got '" + value + "'";
 }
 
+/// The options `run` and `bench` both take for reading their input.
+void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
+  command.add_flag("--accept-lossy-import", load.acceptLossyImport,
+                   "import what is left of a mesh file that lost geometry on the way (faces "
+                   "assimp dropped, unused vertices, fewer rows than the header says), with a "
+                   "warning, instead of refusing it");
+  const softbake::ImportLimits defaults;
+  command
+      .add_option("--max-vertices", load.maxVertices,
+                  "most vertices one mesh file may bring in (default " +
+                      std::to_string(defaults.maxVertices) + ")")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
+  command
+      .add_option("--max-faces", load.maxFaces,
+                  "most triangles one mesh file may bring in (default " +
+                      std::to_string(defaults.maxFaces) + ")")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
+  command
+      .add_option("--max-import-memory", load.maxImportMemoryMib,
+                  "most memory one mesh file's import may take, MiB (default: all of it)")
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 40));
+  command.add_option("--max-bodies", load.maxBodies, "most bodies the scene may have")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
+}
+
 /// `softbake run`: the options it fills, and the --render/--no-render pair it resolves after
 /// parsing.
 struct RunCommandLine {
@@ -43,6 +71,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
       "format assimp reads, dropped on the ground as a soft body), or nothing for the "
       "built-in default scene.");
   runApp->add_option("input", run.input, "scene .json or mesh file (default: built-in scene)");
+  addLoadOptions(*runApp, run.load);
   runApp->add_option("-o,--out", run.out, "output folder")->capture_default_str();
   runApp->add_option("--frames", run.frames, "number of frames to write")
       ->check(CLI::Range(1, 10000000));
@@ -98,6 +127,12 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
+  runApp
+      ->add_option("--max-output-gib", run.maxOutputGib,
+                   "refuse, before any work, a run whose frames would take more than this many "
+                   "GiB on disk (estimated)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   return runApp;
 }
@@ -134,6 +169,7 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ".json, a mesh file or a built-in scene: default, balls1k, balls10k, balls100k, balls1m.");
   benchApp->add_option("scene", bench.input, "scene .json, mesh file or built-in scene name")
       ->required();
+  addLoadOptions(*benchApp, bench.load);
   CLI::Option* benchFrames =
       benchApp->add_option("--frames", bench.frames, "frames to simulate (overrides the scene)")
           ->check(CLI::Range(2, 10000000));

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "cli/command_errors.hpp"
+#include "cli/output_budget.hpp"
 #include "cli/progress_display.hpp"
 #include "cli/scene_input.hpp"
 #include "core/error.hpp"
@@ -233,9 +234,12 @@ int run(const RunOptions& options) {
   if (options.threads > 0)
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
 
-  SceneFile scene = loadSceneInput(options.input);
+  SceneFile scene = loadSceneInput(options.input, options.load);
   applyOverrides(options, scene);
   for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
+  printWarnings(scene);
+  const RenderOptions render = renderOptions(options, scene.render);
+  requireOutputWithin(scene, render.width, render.height, options.maxOutputGib * 0x1p30);
 
   BuildReport report;
   Simulator simulator(buildSceneTopology(scene.setup, &report));
@@ -243,7 +247,6 @@ int run(const RunOptions& options) {
   const SceneTopology& topology = simulator.topology();
   const std::string& name = scene.setup.name;
   describeRun(name, simulator);
-  const RenderOptions render = renderOptions(options, scene.render);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(options, topology);
 

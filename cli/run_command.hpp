@@ -12,6 +12,7 @@ namespace softbake {
 
 struct RunOptions : SimulationOverrides {
   std::string input;  ///< scene .json, a mesh file, or empty for the built-in default scene
+  SceneLoadOptions load;
   std::filesystem::path out = "out";
   std::optional<int> framePadding;
   bool contacts = false;            ///< write OUT/contacts/<scene>_0001.json …
@@ -25,6 +26,7 @@ struct RunOptions : SimulationOverrides {
   std::optional<std::string> vdbCompression;  ///< "zip", "blosc" or "none"
   int threads = 0;                            ///< 0: all cores
   bool quiet = false;
+  double maxOutputGib = 1024;  ///< refuse runs whose frames would take more, roughly
 };
 
 /// Runs the job; returns the process exit code. Errors are printed, never thrown.

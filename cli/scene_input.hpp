@@ -12,7 +12,10 @@ namespace softbake {
 
 /// A file of that name wins over a built-in scene of the same name. Throws softbake::Error naming
 /// the input when it is neither.
-SceneFile loadSceneInput(const std::string& input);
+SceneFile loadSceneInput(const std::string& input, const SceneLoadOptions& options = {});
+
+/// Prints what loading found that may be wrong, one "warning: …" line each on stderr.
+void printWarnings(const SceneFile& scene);
 
 /// The simulation settings `run` and `bench` both take from the command line; unset ones keep the
 /// scene's.

@@ -4,10 +4,12 @@
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
 #include <new>
+#include <optional>
 #include <unordered_set>
 #include <utility>
 
@@ -15,9 +17,11 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "importers/memory_budget.hpp"
+#include "importers/assimp_log.hpp"
+#include "importers/import_losses.hpp"
 #include "importers/mesh_transform.hpp"
 #include "importers/ply_guard.hpp"
+#include "importers/ply_import.hpp"
 
 namespace softbake {
 
@@ -25,14 +29,12 @@ namespace {
 
 // Welding (core/mesh/weld.hpp) replaces JoinIdenticalVertices, and walking the node tree ourselves
 // replaces PreTransformVertices, which would bake mirrored instances without fixing their winding.
-constexpr unsigned kPostProcess =
-    aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+// Validation runs before these, on the loader's own scene.
+constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_SortByPType;
 
 // A render vertex as importMeshFile stores it: position, normal, UV.
 constexpr double kBytesPerVertex = 2 * sizeof(Vec3f) + sizeof(Vec2f);
 constexpr double kBytesPerTriangle = sizeof(Triangle);
-// assimp 5.2's PLY reader keeps every value of every row in its own std::vector of 4-byte values.
-constexpr double kPlyBytesPerValue = sizeof(std::vector<float>) + 4;
 
 struct MeshInstance {
   const aiMesh* mesh;
@@ -191,31 +193,96 @@ TriangleMesh mergeAll(std::vector<TriangleMesh>& meshes, const std::filesystem::
   return merged;
 }
 
-ImportedMeshes importWithAssimp(const std::filesystem::path& path,
-                                const MeshImportOptions& options) {
+// Vertices of the file's meshes that no face uses, as the loader returned them: post-processing
+// could split them off or drop them.
+std::size_t unusedVertices(const aiScene& scene) {
+  std::size_t unused = 0;
+  std::vector<char> used;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    used.assign(mesh.mNumVertices, 0);
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f)
+      for (unsigned i = 0; i < mesh.mFaces[f].mNumIndices; ++i)
+        if (mesh.mFaces[f].mIndices[i] < mesh.mNumVertices) used[mesh.mFaces[f].mIndices[i]] = 1;
+    unused += std::size_t(std::count(used.begin(), used.end(), 0));
+  }
+  return unused;
+}
+
+std::size_t vertexCount(const aiScene& scene) {
+  std::size_t vertices = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) vertices += scene.mMeshes[m]->mNumVertices;
+  return vertices;
+}
+
+std::size_t faceCount(const aiScene& scene) {
+  std::size_t faces = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) faces += scene.mMeshes[m]->mNumFaces;
+  return faces;
+}
+
+// One mesh, or all merged into one, or each named apart.
+void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& options,
+                   ImportedMeshes& result) {
+  if (options.mergeMeshes) {
+    TriangleMesh merged = mergeAll(result.meshes, path, result.notes);
+    result.meshes.clear();
+    result.meshes.push_back(std::move(merged));
+  } else {
+    makeNamesUnique(result.meshes);
+  }
+}
+
+ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImportOptions& options,
+                                const PlyPreparation* ply) {
   const std::string file = path.string();
-  // No Assimp::DefaultLogger is ever created, so assimp logs into its NullLogger: nothing of it
-  // reaches stdout or stderr.
+  const AssimpLogCapture log;
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(file, kPostProcess);
+  // Validation only, so the scene can be inspected as the loader made it before post-processing.
+  const aiScene* scene = importer.ReadFile(file, aiProcess_ValidateDataStructure);
   if (!scene) {
     const std::string why = importer.GetErrorString();
     if (why.find("No suitable reader found") != std::string::npos)
       throw Error(cat(file, ": unsupported format (assimp: ", why, ")"));
     throw Error(cat(file, ": cannot import (assimp: ", why, ")"));
   }
+  std::vector<std::string> losses;
+  if (ply) {
+    losses = ply->losses;
+    compareWithHeader(ply->header, vertexCount(*scene), faceCount(*scene), losses);
+  }
+  if (std::optional<std::string> loss =
+          unusedVertexLoss(unusedVertices(*scene), vertexCount(*scene)))
+    losses.push_back(std::move(*loss));
+  scene = importer.ApplyPostProcessing(kPostProcess);
+  if (!scene) throw Error(cat(file, ": cannot import (assimp: ", importer.GetErrorString(), ")"));
+
+  // A message that says what was lost is told once, as a loss.
+  std::vector<AssimpMessage> others;
+  for (const AssimpMessage& message : log.messages()) {
+    if (std::optional<std::string_view> lost = geometryLostIn(message.text))
+      losses.push_back(cat(*lost, " (assimp: ", message.text, ")"));
+    else
+      others.push_back(message);
+  }
+  ImportedMeshes result;
+  result.warnings = describeAssimpMessages(file, others, log.unkept());
+  settleLosses(file, losses, options.acceptLossy, result.warnings);
 
   const std::string stem = path.stem().string();
   const std::vector<MeshInstance> instances = collectInstances(*scene, stem);
-  double bytes = 0;
-  for (const MeshInstance& instance : instances)
-    bytes += instance.mesh->mNumVertices * kBytesPerVertex +
-             instance.mesh->mNumFaces * kBytesPerTriangle;
+  std::uint64_t vertices = 0, faces = 0;
+  for (const MeshInstance& instance : instances) {
+    vertices += instance.mesh->mNumVertices;
+    faces += instance.mesh->mNumFaces;
+  }
+  requireWithinLimits(path, vertices, faces, options.limits);
+  double bytes = double(vertices) * kBytesPerVertex + double(faces) * kBytesPerTriangle;
   // Merging copies everything once more.
   if (options.mergeMeshes) bytes *= 2;
-  requireMemory(path, bytes, cat("importing ", instances.size(), " mesh instances"));
+  requireImportMemory(path, bytes, cat("importing ", instances.size(), " mesh instances"),
+                      options.limits);
 
-  ImportedMeshes result;
   DroppedPrimitives dropped;
   for (const MeshInstance& instance : instances) {
     TriangleMesh mesh = toTriangleMesh(instance, dropped);
@@ -232,23 +299,32 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path,
       throw Error(cat(file, ": no triangles (the file holds only points and lines)"));
     throw Error(cat(file, ": no triangles (the file holds no meshes)"));
   }
-  if (options.mergeMeshes) {
-    TriangleMesh merged = mergeAll(result.meshes, path, result.notes);
-    result.meshes.clear();
-    result.meshes.push_back(std::move(merged));
-  } else {
-    makeNamesUnique(result.meshes);
-  }
+  arrangeMeshes(path, options, result);
   return result;
 }
 
-// assimp's PLY reader trusts the header (see ply_guard.hpp), and allocates for its counts.
-void guardPly(const std::filesystem::path& path) {
-  const PlyHeader header = checkPlyFile(path);
-  double values = 0;
-  for (const PlyElement& element : header.elements)
-    values += double(element.count) * double(element.propertyCount);
-  requireMemory(path, values * kPlyBytesPerValue, "reading the PLY file");
+// A PLY file softbake read itself: what assimp's path checks, on softbake's mesh.
+ImportedMeshes importPlyMesh(const std::filesystem::path& path, const MeshImportOptions& options,
+                             PlyPreparation& ply) {
+  const std::string file = path.string();
+  TriangleMesh& mesh = *ply.mesh;
+  std::vector<char> used(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (Index v : t) used[v] = 1;
+  std::vector<std::string> losses = std::move(ply.losses);
+  if (std::optional<std::string> loss = unusedVertexLoss(
+          std::size_t(std::count(used.begin(), used.end(), 0)), mesh.positions.size()))
+    losses.push_back(std::move(*loss));
+  ImportedMeshes result;
+  result.notes = std::move(ply.notes);
+  settleLosses(file, losses, options.acceptLossy, result.warnings);
+  if (mesh.triangles.empty()) throw Error(cat(file, ": no triangles"));
+  requireWithinLimits(path, mesh.positions.size(), mesh.triangles.size(), options.limits);
+  mesh.name = path.stem().string();
+  requireFinite(path, mesh);
+  result.meshes.push_back(std::move(mesh));
+  arrangeMeshes(path, options, result);
+  return result;
 }
 
 }  // namespace
@@ -264,13 +340,17 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
   const std::uintmax_t fileSize = std::filesystem::file_size(path, error);
   if (error) throw Error(cat(file, ": cannot read the file (", error.message(), ")"));
   // assimp reads the whole file into memory before parsing it.
-  requireMemory(path, double(fileSize), "reading the file");
+  requireImportMemory(path, double(fileSize), "reading the file", options.limits);
 
   try {
     std::string extension = path.extension().string();
     for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (extension == ".ply" || isPlyFile(path)) guardPly(path);
-    return importWithAssimp(path, options);
+    std::optional<PlyPreparation> ply;
+    if (extension == ".ply" || isPlyFile(path)) {
+      ply = preparePly(path, options.limits);
+      if (ply->mesh) return importPlyMesh(path, options, *ply);
+    }
+    return importWithAssimp(path, options, ply ? &*ply : nullptr);
   } catch (const std::bad_alloc&) {
     throw Error(
         cat(file, ": mesh too large for this machine: ran out of memory while importing it"));

@@ -6,12 +6,17 @@
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
+#include "importers/import_limits.hpp"
 
 namespace softbake {
 
 struct MeshImportOptions {
   /// Merge every mesh of the file into one (one body); otherwise one mesh per aiMesh instance.
   bool mergeMeshes = false;
+  /// Import what is left of a file that lost geometry on the way (import_losses.hpp), with a
+  /// warning, instead of refusing it.
+  bool acceptLossy = false;
+  ImportLimits limits{};
 };
 
 struct ImportedMeshes {
@@ -19,11 +24,15 @@ struct ImportedMeshes {
   /// triangles only. Named after the node, or the aiMesh, or the file.
   std::vector<TriangleMesh> meshes;
   std::vector<std::string> notes;  ///< things the user should hear about, one line each
+  /// Things that may be wrong with the result: assimp's warnings and errors ("x.gltf: assimp:
+  /// …"), an accepted loss. One line each, starting with the file.
+  std::vector<std::string> warnings;
 };
 
 /// Throws softbake::Error, naming the file, when it is missing, not a format assimp reads,
 /// malformed (including PLY headers that would crash assimp 5.2), has no triangles, has
-/// non-finite coordinates, or is too large for this machine's memory.
+/// non-finite coordinates, lost geometry on the way (unless options.acceptLossy), or is above
+/// options.limits or too large for this machine's memory.
 ImportedMeshes importMeshFile(const std::filesystem::path& path,
                               const MeshImportOptions& options = {});
 

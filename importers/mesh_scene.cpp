@@ -28,10 +28,17 @@ std::string threeDigits(double x) {
 
 }  // namespace
 
-SceneFile sceneFromMeshFile(const std::filesystem::path& path) {
-  ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false});
+SceneFile sceneFromMeshFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
+  ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false,
+                                                  .acceptLossy = options.acceptLossyImport,
+                                                  .limits = options.importLimits()});
+  if (imported.meshes.size() > options.maxBodies)
+    throw Error(cat(path.string(), ": ", imported.meshes.size(),
+                    " meshes make as many bodies, above the limit of ", options.maxBodies,
+                    " (--max-bodies raises it)"));
   SceneFile scene;
   scene.notes = std::move(imported.notes);
+  scene.warnings = std::move(imported.warnings);
   scene.setup.name = fileSafeSceneName(path.stem().string());
   scene.setup.settings = SimulationSettings();
   scene.setup.settings.fps = 24;

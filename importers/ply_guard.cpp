@@ -15,18 +15,23 @@ namespace {
 
 struct PlyType {
   std::string_view name;
+  PlyScalar scalar;
   int bytes;
   bool integer;
 };
 
+using enum PlyScalar;
+
 // Both spellings of the PLY 1.0 types; assimp 5.2 accepts all of them.
 constexpr std::array kTypes = {
-    PlyType{"char", 1, true},     PlyType{"int8", 1, true},     PlyType{"uchar", 1, true},
-    PlyType{"uint8", 1, true},    PlyType{"short", 2, true},    PlyType{"int16", 2, true},
-    PlyType{"ushort", 2, true},   PlyType{"uint16", 2, true},   PlyType{"int", 4, true},
-    PlyType{"int32", 4, true},    PlyType{"uint", 4, true},     PlyType{"uint32", 4, true},
-    PlyType{"float", 4, false},   PlyType{"float32", 4, false}, PlyType{"double", 8, false},
-    PlyType{"float64", 8, false},
+    PlyType{"char", kInt8, 1, true},       PlyType{"int8", kInt8, 1, true},
+    PlyType{"uchar", kUInt8, 1, true},     PlyType{"uint8", kUInt8, 1, true},
+    PlyType{"short", kInt16, 2, true},     PlyType{"int16", kInt16, 2, true},
+    PlyType{"ushort", kUInt16, 2, true},   PlyType{"uint16", kUInt16, 2, true},
+    PlyType{"int", kInt32, 4, true},       PlyType{"int32", kInt32, 4, true},
+    PlyType{"uint", kUInt32, 4, true},     PlyType{"uint32", kUInt32, 4, true},
+    PlyType{"float", kFloat32, 4, false},  PlyType{"float32", kFloat32, 4, false},
+    PlyType{"double", kFloat64, 8, false}, PlyType{"float64", kFloat64, 8, false},
 };
 
 std::optional<PlyType> findType(std::string_view name) {
@@ -155,14 +160,18 @@ class HeaderParser {
       if (!countType) fail(number, cat("unknown type '", words[2], "'"));
       if (!countType->integer)
         fail(number, cat("list count type '", words[2], "' is not an integer type"));
-      if (!findType(words[3])) fail(number, cat("unknown type '", words[3], "'"));
+      const std::optional<PlyType> itemType = findType(words[3]);
+      if (!itemType) fail(number, cat("unknown type '", words[3], "'"));
       element.minRowBytes += std::uint64_t(countType->bytes);
       element.fixedSize = false;
+      element.properties.push_back(
+          {std::string(words[4]), itemType->scalar, true, countType->scalar});
     } else {
       if (words.size() != 3) fail(number, "expected 'property <type> <name>'");
       const std::optional<PlyType> type = findType(words[1]);
       if (!type) fail(number, cat("unknown type '", words[1], "'"));
       element.minRowBytes += std::uint64_t(type->bytes);
+      element.properties.push_back({std::string(words[2]), type->scalar});
     }
     ++element.propertyCount;
   }
@@ -187,6 +196,12 @@ class HeaderParser {
 };
 
 }  // namespace
+
+int plyScalarBytes(PlyScalar type) {
+  for (const PlyType& known : kTypes)
+    if (known.scalar == type) return known.bytes;
+  return 0;
+}
 
 bool hasPlyMagic(std::string_view firstBytes) {
   if (firstBytes.size() < 3) return false;

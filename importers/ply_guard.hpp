@@ -15,9 +15,23 @@ namespace softbake {
 
 enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
 
+/// The value types of PLY 1.0 (each under both of its names: char and int8, …).
+enum class PlyScalar { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+
+/// Bytes of one binary value of `type`.
+int plyScalarBytes(PlyScalar type);
+
+struct PlyProperty {
+  std::string name;
+  PlyScalar type = PlyScalar::kFloat32;  ///< of the value, or of a list's items
+  bool list = false;
+  PlyScalar countType = PlyScalar::kUInt8;  ///< of a list's length; an integer type
+};
+
 struct PlyElement {
   std::string name;
   std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
   std::size_t propertyCount = 0;
   /// Bytes of one binary row with every list empty: a lower bound for elements with lists.
   std::uint64_t minRowBytes = 0;

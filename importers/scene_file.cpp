@@ -19,7 +19,8 @@ namespace softbake {
 
 namespace {
 
-constexpr int kMaxSubdivisions = 7;  // 163842 vertices; one more level is 655362
+constexpr int kMaxSubdivisions = 7;             // 163842 vertices; one more level is 655362
+constexpr long long kMaxMebibytes = 1LL << 40;  // a byte count that still fits 64 bits
 
 std::string validPresetNames() {
   std::string names;
@@ -58,8 +59,9 @@ std::string sceneName(const JsonValue& value) {
 
 class SceneParser {
  public:
-  SceneParser(std::string_view source, const std::filesystem::path& baseDirectory)
-      : source_(source), baseDirectory_(baseDirectory) {}
+  SceneParser(std::string_view source, const std::filesystem::path& baseDirectory,
+              const SceneLoadOptions& options)
+      : source_(source), baseDirectory_(baseDirectory), options_(options) {}
 
   SceneFile parse(const nlohmann::json& json) {
     const JsonObject root =
@@ -72,8 +74,18 @@ class SceneParser {
     const JsonValue bodies = root.at("bodies");
     const std::vector<JsonValue> bodyValues = bodies.array();
     if (bodyValues.empty()) bodies.fail("expected at least one body");
+    // Before any mesh is read.
+    if (bodyValues.size() > options_.maxBodies)
+      bodies.fail(cat(bodyValues.size(), " bodies, above the limit of ", options_.maxBodies,
+                      " (--max-bodies raises it)"));
     std::map<std::string, std::string> bodyNames;  // name -> key path that gave it
-    for (std::size_t i = 0; i < bodyValues.size(); ++i) parseBody(bodyValues[i], i, bodyNames);
+    for (std::size_t i = 0; i < bodyValues.size(); ++i) {
+      parseBody(bodyValues[i], i, bodyNames);
+      if (scene_.setup.bodies.size() > options_.maxBodies)
+        bodyValues[i].fail(cat("its file's meshes bring the scene to ", scene_.setup.bodies.size(),
+                               " bodies, above the limit of ", options_.maxBodies,
+                               " (--max-bodies raises it)"));
+    }
 
     if (auto colliders = root.find("colliders")) {
       const std::vector<JsonValue> colliderValues = colliders->array();
@@ -88,7 +100,7 @@ class SceneParser {
  private:
   void parseSettings(const JsonValue& value) {
     const JsonObject object = value.object({"fps", "frames", "integrator", "substeps", "gravity",
-                                            "units", "max_speed", "skin", "collisions"});
+                                            "units", "max_speed", "skin", "collisions", "import"});
     SimulationSettings& settings = scene_.setup.settings;
     if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
     if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
@@ -110,6 +122,27 @@ class SceneParser {
       settings.maxSpeed = Scalar(maxSpeed->numberAbove(0));
     if (auto skin = object.find("skin")) settings.skin = Scalar(skin->numberAtLeast(0));
     if (auto collisions = object.find("collisions")) parseCollisions(*collisions);
+    if (auto import = object.find("import")) parseImport(*import);
+  }
+
+  // Before the bodies, whose meshes it applies to. The command line's values win.
+  void parseImport(const JsonValue& value) {
+    const JsonObject object =
+        value.object({"accept_lossy", "max_vertices", "max_faces", "max_memory_mib"});
+    if (auto accept = object.find("accept_lossy"))
+      options_.acceptLossyImport = options_.acceptLossyImport || accept->boolean();
+    if (auto vertices = object.find("max_vertices"))
+      limits_.maxVertices = std::uint64_t(vertices->integerAtLeast(1));
+    if (auto faces = object.find("max_faces"))
+      limits_.maxFaces = std::uint64_t(faces->integerAtLeast(1));
+    if (auto memory = object.find("max_memory_mib"))
+      limits_.maxMemoryBytes = std::uint64_t(memory->integerIn(1, kMaxMebibytes)) << 20;
+  }
+
+  MeshImportOptions importOptions(bool merge) const {
+    return {.mergeMeshes = merge,
+            .acceptLossy = options_.acceptLossyImport,
+            .limits = options_.importLimits(limits_)};
   }
 
   void parseCollisions(const JsonValue& value) {
@@ -151,11 +184,13 @@ class SceneParser {
         value.fail(cat("mesh file not found: ", resolved.string()));
       ImportedMeshes imported;
       try {
-        imported = importMeshFile(resolved, {.mergeMeshes = merge});
+        imported = importMeshFile(resolved, importOptions(merge));
       } catch (const Error& importError) {
         value.fail(importError.what());
       }
       for (std::string& note : imported.notes) scene_.notes.push_back(std::move(note));
+      for (std::string& warning : imported.warnings)
+        scene_.warnings.push_back(cat(source_, ": ", value.path(), ": ", warning));
       return std::move(imported.meshes);
     }
     if (value.isObject()) {
@@ -377,19 +412,28 @@ class SceneParser {
 
   std::string_view source_;
   std::filesystem::path baseDirectory_;
+  SceneLoadOptions options_;
+  ImportLimits limits_;  // the defaults, then the scene's
   SceneFile scene_;
 };
 
 }  // namespace
 
-SceneFile parseScene(const nlohmann::json& json, std::string_view source,
-                     const std::filesystem::path& baseDirectory) {
-  return SceneParser(source, baseDirectory).parse(json);
+ImportLimits SceneLoadOptions::importLimits(ImportLimits scene) const {
+  if (maxVertices) scene.maxVertices = *maxVertices;
+  if (maxFaces) scene.maxFaces = *maxFaces;
+  if (maxImportMemoryMib) scene.maxMemoryBytes = *maxImportMemoryMib << 20;
+  return scene;
 }
 
-SceneFile loadSceneFile(const std::filesystem::path& path) {
+SceneFile parseScene(const nlohmann::json& json, std::string_view source,
+                     const std::filesystem::path& baseDirectory, const SceneLoadOptions& options) {
+  return SceneParser(source, baseDirectory, options).parse(json);
+}
+
+SceneFile loadSceneFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
   const nlohmann::json json = readJsonFile(path);
-  return parseScene(json, path.string(), path.parent_path());
+  return parseScene(json, path.string(), path.parent_path(), options);
 }
 
 std::string fileSafeSceneName(std::string name) {

@@ -2,6 +2,7 @@
 /// Scene files (JSON) and the two scenes that need no file: the built-in default scene and a single
 /// mesh dropped on the ground. All three produce the same SceneFile.
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "core/scene/scene_setup.hpp"
+#include "importers/import_limits.hpp"
 
 namespace softbake {
 
@@ -41,18 +43,35 @@ struct SceneFile {
   SceneSetup setup;
   OutputOptions output;
   RenderSettings render;
-  std::vector<std::string> notes;  ///< what loading did that the user should hear about
+  std::vector<std::string> notes;     ///< what loading did that the user should hear about
+  std::vector<std::string> warnings;  ///< what may be wrong with the meshes it read
+};
+
+/// How the command line asks scenes to be loaded; a scene file's `settings.import` adds to it.
+struct SceneLoadOptions {
+  /// Import what is left of mesh files that lost geometry, with a warning (MeshImportOptions).
+  /// A scene's `settings.import.accept_lossy` turns it on too.
+  bool acceptLossyImport = false;
+  /// Caps per mesh file (ImportLimits); unset ones are the scene's `settings.import` values, or
+  /// the defaults.
+  std::optional<std::uint64_t> maxVertices{}, maxFaces{}, maxImportMemoryMib{};
+  /// `scene` (the defaults, or a scene's settings.import) with the caps set here written over it.
+  ImportLimits importLimits(ImportLimits scene = {}) const;
+  /// Bodies a scene may have, counted before its meshes are read and again as files split into
+  /// several. Only the command line sets it: it bounds what a scene may ask for.
+  std::size_t maxBodies = 10'000;
 };
 
 /// Loads and validates a scene file. Mesh paths are relative to the scene file's folder. Throws
 /// softbake::Error naming the file and the key path: "scene.json: bodies[1].material.stiffness:
 /// expected number".
-SceneFile loadSceneFile(const std::filesystem::path& path);
+SceneFile loadSceneFile(const std::filesystem::path& path, const SceneLoadOptions& options = {});
 
 /// The same, from JSON already parsed; `source` names it in messages, `baseDirectory` resolves
 /// mesh paths.
 SceneFile parseScene(const nlohmann::json& json, std::string_view source,
-                     const std::filesystem::path& baseDirectory);
+                     const std::filesystem::path& baseDirectory,
+                     const SceneLoadOptions& options = {});
 
 /// The JSON text of the built-in default scene: two soft balls thrown at each other over a ground
 /// plane, 240 frames at 24 fps. examples/default.json is a copy, checked by a test.
@@ -63,7 +82,8 @@ SceneFile defaultScene();
 
 /// A scene of one mesh file: the file's meshes as soft bodies of the default material, scaled to
 /// about a metre when far from it (noted), dropped from above a ground plane.
-SceneFile sceneFromMeshFile(const std::filesystem::path& path);
+SceneFile sceneFromMeshFile(const std::filesystem::path& path,
+                            const SceneLoadOptions& options = {});
 
 /// `name` with every '/', '\\' and whitespace replaced by '_', so it can be a file stem and an OBJ
 /// `mtllib` argument ("my ball.fbx" gives the scene "my_ball").

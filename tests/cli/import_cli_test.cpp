@@ -1,0 +1,143 @@
+// Bad input through the real `softbake` binary, in a child process as a user would meet it: the
+// documented exit status (1), a message naming the file, and no frames on disk.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int exitCode = -1;  // -1: killed by a signal
+  std::string output;
+};
+
+std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+Result runSoftbake(const std::string& arguments) {
+  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
+  Result result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+    result.output.append(buffer, read);
+  const int status = pclose(pipe);
+  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+fs::path importData(const std::string& name) {
+  return fs::path(SOFTBAKE_SOURCE_DIR) / "tests" / "data" / "import" / name;
+}
+
+// Every file under `folder`, which need not exist.
+std::size_t filesUnder(const fs::path& folder) {
+  std::size_t files = 0;
+  std::error_code error;
+  if (!fs::exists(folder, error)) return 0;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(folder))
+    files += entry.is_regular_file() ? 1 : 0;
+  return files;
+}
+
+class ImportCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    folder_ = fs::temp_directory_path() /
+              (std::string("softbake_import_cli_") + info->name() + "_" + std::to_string(getpid()));
+    fs::remove_all(folder_);
+    fs::create_directories(folder_);
+  }
+  void TearDown() override { fs::remove_all(folder_); }
+
+  fs::path folder_;
+};
+
+TEST_F(ImportCliTest, AGltfThatLostAFaceIsRefusedWithExitOneNamingTheFileAndNoFrames) {
+  const fs::path bad = importData("box_out_of_range_index.gltf");
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run " + quoted(bad.string()) + " --frames 3 --no-render -o " +
+                                 quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("softbake: error: " + bad.string() +
+                            ": the import lost geometry: faces dropped"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(filesUnder(out), 0u) << "frames written for a refused file";
+}
+
+TEST_F(ImportCliTest, AcceptingTheLossRunsWithAWarningNamingTheFile) {
+  const fs::path bad = importData("box_out_of_range_index.gltf");
+  const fs::path out = folder_ / "out";
+  const Result run =
+      runSoftbake("run " + quoted(bad.string()) +
+                  " --accept-lossy-import --frames 3 --no-render -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(
+      run.output.find("warning: " + bad.string() + ": the import lost geometry: faces dropped"),
+      std::string::npos)
+      << run.output;
+  EXPECT_TRUE(fs::exists(out / "obj" / "box_out_of_range_index_0003.obj"));
+}
+
+TEST_F(ImportCliTest, BenchRefusesTheLossTooUnlessAccepted) {
+  const std::string bad = quoted(importData("box_out_of_range_index.gltf").string());
+  const Result refused = runSoftbake("bench " + bad + " --frames 2");
+  EXPECT_EQ(refused.exitCode, 1) << refused.output;
+  EXPECT_NE(refused.output.find("faces dropped"), std::string::npos) << refused.output;
+  const Result accepted = runSoftbake("bench " + bad + " --frames 2 --accept-lossy-import");
+  EXPECT_EQ(accepted.exitCode, 0) << accepted.output;
+}
+
+TEST_F(ImportCliTest, AFileAboveTheFaceCapIsRefusedNamingTheFileAndTheFlag) {
+  const fs::path box = importData("box.gltf");
+  const fs::path out = folder_ / "out";
+  const Result run = runSoftbake("run " + quoted(box.string()) + " --max-faces 11 --no-render -o " +
+                                 quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find(box.string() + ": 12 faces, above the limit of 11 per file "
+                                           "(--max-faces"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(filesUnder(out), 0u);
+}
+
+TEST_F(ImportCliTest, ARunWhoseFramesWouldNotFitTheOutputBoundIsRefusedBeforeAnyWork) {
+  const fs::path out = folder_ / "out";
+  // The box's OBJ frames are about a kilobyte each: a million of them are about a gigabyte.
+  const Result run =
+      runSoftbake("run " + quoted(importData("box.gltf").string()) +
+                  " --frames 1000000 --max-output-gib 0.5 --no-render -o " + quoted(out.string()));
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("softbake: error: scene 'box': 1000000 frames of about "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("above the limit of 512.0 MiB (--max-output-gib raises it)"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(run.output.find("substeps:"), std::string::npos) << "work started:\n" << run.output;
+  EXPECT_EQ(filesUnder(out), 0u);
+}
+
+TEST_F(ImportCliTest, TooManyBodiesAreRefusedForBuiltInScenesToo) {
+  const Result run = runSoftbake("bench balls1k --frames 2 --max-bodies 3");
+  EXPECT_EQ(run.exitCode, 1) << run.output;
+  EXPECT_NE(run.output.find("scene 'balls1k': 4 bodies, above the limit of 3 (--max-bodies"),
+            std::string::npos)
+      << run.output;
+}
+
+}  // namespace

@@ -1,0 +1,118 @@
+// Caps on what one mesh file may bring in and on how many bodies a scene may have: each refusal
+// names the file (or the scene's key) and says how to raise the cap.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "core/text.hpp"
+#include "importers/mesh_import.hpp"
+#include "importers/scene_file.hpp"
+#include "test_files.hpp"
+
+namespace softbake {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+std::filesystem::path box() {
+  return test::sourceDir() / "tests" / "data" / "import" / "box.gltf";
+}
+
+template <class Load>
+std::string errorOf(Load&& load) {
+  try {
+    load();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+SceneFile sceneOf(const std::string& json, const SceneLoadOptions& options = {}) {
+  return parseScene(nlohmann::json::parse(json), "scene.json", ".", options);
+}
+
+TEST(ImportLimits, FacesAndVerticesAboveTheirCapsAreRefusedNamingTheFile) {
+  ImportLimits limits;
+  limits.maxFaces = 11;
+  EXPECT_EQ(errorOf([&] { importMeshFile(box(), {.limits = limits}); }),
+            box().string() +
+                ": 12 faces, above the limit of 11 per file (--max-faces or "
+                "settings.import.max_faces raises it)");
+  limits.maxFaces = 12;
+  limits.maxVertices = 7;
+  EXPECT_EQ(errorOf([&] { importMeshFile(box(), {.limits = limits}); }),
+            box().string() +
+                ": 8 vertices, above the limit of 7 per file (--max-vertices or "
+                "settings.import.max_vertices raises it)");
+  limits.maxVertices = 8;
+  EXPECT_EQ(importMeshFile(box(), {.limits = limits}).meshes[0].triangles.size(), 12u);
+}
+
+TEST(ImportLimits, APlyHeaderAboveTheDefaultCapIsRefusedBeforeItsRowsAreRead) {
+  test::ScratchDir dir;
+  const auto file = dir.write("huge.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                              "property float y\nproperty float z\nelement face 60000000\n"
+                              "property list uchar int vertex_indices\nend_header\n"
+                              "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(errorOf([&] { importMeshFile(file, {.acceptLossy = true}); }),
+            file.string() +
+                ": 60000000 faces, above the limit of 50000000 per file (--max-faces or "
+                "settings.import.max_faces raises it)");
+}
+
+TEST(ImportLimits, MemoryAboveTheCapIsRefusedNamingTheCap) {
+  ImportLimits limits;
+  limits.maxMemoryBytes = 1024;  // the file alone is 1091 bytes
+  EXPECT_EQ(errorOf([&] { importMeshFile(box(), {.limits = limits}); }),
+            box().string() +
+                ": reading the file needs about 1.1 KiB, above the import memory limit of 1.0 "
+                "KiB (--max-import-memory or settings.import.max_memory_mib raises it)");
+}
+
+TEST(ImportLimits, TheSceneSetsTheCapsAndTheCommandLineWins) {
+  const std::string scene =
+      cat(R"({"settings": {"import": {"max_faces": 11}}, "bodies": [{"mesh": ")", box().string(),
+          R"("}]})");
+  EXPECT_THAT(errorOf([&] { sceneOf(scene); }),
+              StartsWith("scene.json: bodies[0].mesh: " + box().string() +
+                         ": 12 faces, above the limit of 11 per file"));
+  EXPECT_EQ(sceneOf(scene, {.maxFaces = 12}).setup.bodies.size(), 1u);
+  EXPECT_THAT(
+      errorOf([&] { sceneOf(R"({"settings": {"import": {"max_memory_mib": 0}}, "bodies": []})"); }),
+      StartsWith("scene.json: settings.import.max_memory_mib: expected an integer in [1, "));
+}
+
+TEST(ImportLimits, TooManyBodiesAreRefusedBeforeAnyMeshIsRead) {
+  // The mesh files do not exist: the count is checked first.
+  const std::string scene =
+      R"({"bodies": [{"mesh": "a.obj"}, {"mesh": "b.obj"}, {"mesh": "c.obj"}]})";
+  EXPECT_EQ(errorOf([&] { sceneOf(scene, {.maxBodies = 2}); }),
+            "scene.json: bodies: 3 bodies, above the limit of 2 (--max-bodies raises it)");
+  EXPECT_THAT(errorOf([&] { sceneOf(scene, {.maxBodies = 3}); }), HasSubstr("mesh file not found"));
+}
+
+TEST(ImportLimits, AFileSplitIntoMoreBodiesThanTheLimitIsRefused) {
+  test::ScratchDir dir;
+  std::string obj;
+  for (int part = 0; part < 3; ++part)
+    obj += cat("o part", part, "\nv ", part, " 0 0\nv ", part + 1, " 0 0\nv ", part, " 1 0\nf ",
+               3 * part + 1, " ", 3 * part + 2, " ", 3 * part + 3, "\n");
+  const auto file = dir.write("parts.obj", obj);
+  const std::string scene = cat(R"({"bodies": [{"mesh": ")", file.string(), R"("}]})");
+  EXPECT_EQ(errorOf([&] { sceneOf(scene, {.maxBodies = 2}); }),
+            "scene.json: bodies[0]: its file's meshes bring the scene to 3 bodies, above the "
+            "limit of 2 (--max-bodies raises it)");
+  EXPECT_EQ(sceneOf(scene, {.maxBodies = 3}).setup.bodies.size(), 3u);
+  EXPECT_EQ(errorOf([&] { sceneFromMeshFile(file, {.maxBodies = 2}); }),
+            file.string() +
+                ": 3 meshes make as many bodies, above the limit of 2 (--max-bodies raises it)");
+}
+
+}  // namespace
+}  // namespace softbake
