@@ -1,9 +1,10 @@
 // The hard contact cases (issue: contacts that hold in the hard cases), measured frame by frame:
 // intersecting triangle pairs by the tests' exact checker, contacts and the response's cost per
-// substep, energy above the start, and whether the run reached its last frame. One markdown table
-// row per scene: bench/contacts.sh writes bench/results/contacts.md from them.
+// substep (the response and the failsafe), energy above the start, and whether the run reached its
+// last frame. One markdown table row per scene: bench/contacts.sh writes bench/results/contacts.md
+// from them.
 //
-//   contact_cases SCENE.json [explicit|implicit|xpbd] [initial_overlap]
+//   contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] [failsafe|nofailsafe]
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -22,7 +23,8 @@ using namespace softbake;
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
-                 "usage: contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore]\n");
+                 "usage: contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] "
+                 "[failsafe|nofailsafe]\n");
     return 1;
   }
   try {
@@ -32,6 +34,7 @@ int main(int argc, char** argv) {
       throw Error(std::string("unknown integrator ") + argv[2]);
     if (argc > 3 && !parseInitialOverlapMode(argv[3], settings.collisions.initialOverlap))
       throw Error(std::string("unknown initial_overlap ") + argv[3]);
+    if (argc > 4) settings.collisions.failsafe = std::strcmp(argv[4], "nofailsafe") != 0;
     Simulator simulator(buildSceneTopology(file.setup));
     simulator.measureStages(true);
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
@@ -47,8 +50,9 @@ int main(int argc, char** argv) {
         simulator.beginFrame();
         for (int s = 0; s < simulator.substeps().substeps; ++s) {
           simulator.step(frame);
-          responseSeconds +=
-              1e-9 * double(simulator.lastStepTimes().nanoseconds[int(Stage::Response)]);
+          const StageTimes& times = simulator.lastStepTimes();
+          responseSeconds += 1e-9 * double(times.nanoseconds[int(Stage::Response)] +
+                                           times.nanoseconds[int(Stage::Failsafe)]);
         }
       } catch (const Error& error) {
         failure = error.what();
@@ -77,7 +81,9 @@ int main(int argc, char** argv) {
         "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
         "%.1f |\n",
         std::filesystem::path(argv[1]).stem().string().c_str(),
-        std::string(integratorName(settings.integrator)).c_str(),
+        (std::string(integratorName(settings.integrator)) +
+         (settings.collisions.failsafe ? "" : ", no failsafe"))
+            .c_str(),
         simulator.topology().bodies.size(), triangles,
         failure.empty() ? std::to_string(reached).c_str()
                         : ("blew up at " + std::to_string(reached + 1)).c_str(),

@@ -1,12 +1,11 @@
 #!/usr/bin/env bash
-# The hard contact cases and figure 7, frame by frame under the default (implicit) integrator and,
-# where it finishes in minutes, the paper's explicit Euler: the table bench/results/contacts.md
-# records. (Explicit Euler on the mixed pile ran over 10 minutes, at the hundreds of substeps per
-# frame its stiffest body needs, and was stopped.)
+# The hard contact cases and figure 7, frame by frame under the default (implicit) integrator, the
+# paper's explicit Euler, and the implicit one without the failsafe stage (the paper's pipeline
+# alone): the table bench/results/contacts.md records.
 #   bash bench/contacts.sh [BUILD_DIR] > bench/results/contacts.txt
-# Scenes: bench/scenes/contact_cases/*.json (a pinned sheet with a ball, a mixed pile of eight
-# bodies, a heavy ball on a jelly one, two parts that start inside each other) and
-# examples/fig7_10k_faces.json. Intersecting pairs come from the tests' exact checker
+# Scenes, all in examples/: a pinned sheet with a ball, a mixed pile of eight bodies, a heavy ball
+# on a jelly one, two parts that start inside each other, a flag folding onto the ground, and
+# figure 7. Intersecting pairs come from the tests' exact checker
 # (tests/support/intersection_checker.hpp), counted at the end of every frame; its time is not in
 # frames/s.
 set -euo pipefail
@@ -15,16 +14,15 @@ build=${1:-$root/build}
 cases=$build/bench/contact_cases  # and contact_sweep beside it
 [ -x "$cases" ] || { echo "contacts.sh: build $cases first (it needs the test suite)" >&2; exit 1; }
 
-printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response ms/substep | energy above start, J | frames/s |\n'
+printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s |\n'
 printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|\n'
-for scene in "$root"/bench/scenes/contact_cases/*.json "$root/examples/fig7_10k_faces.json"; do
+for name in sheet_ball mixed_pile heavy_on_jelly glued_assembly flag_fold fig7_10k_faces; do
+  scene=$root/examples/$name.json
   "$cases" "$scene" implicit
-  case $(basename "$scene") in
-    mixed_pile.json) ;;
-    *) "$cases" "$scene" explicit ;;
-  esac
+  "$cases" "$scene" explicit
+  "$cases" "$scene" implicit separate nofailsafe
 done
-"$cases" "$root/bench/scenes/contact_cases/glued_assembly.json" implicit ignore |
+"$cases" "$root/examples/glued_assembly.json" implicit ignore |
   sed 's/^| glued_assembly /| glued_assembly (ignore) /'
 # Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) up to 10:1:
 # the most intersecting pairs between them at a frame's end, or the frame the run blew up at.

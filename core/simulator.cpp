@@ -80,10 +80,25 @@ void Simulator::step(int frame) {
     clock.lap(Stage::Forces);
   }
   const Scalar dt = Scalar(substeps_.timeStep);
-  if (implicit_) holds_->holdFor(*implicit_, state_, dt);
-  const bool finite = implicit_ ? implicit_->step(topology, forces_, dt, state_, substepStart_)
-                      : xpbd_   ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
-                                : integrate(topology, forces_, dt, state_, substepStart_);
+  bool finite = false;
+  if (implicit_) {
+    holds_->holdFor(*implicit_, state_, dt);
+    if (!topology.planes.empty()) velocityStart_ = state_.velocity;
+    finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
+    // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is held.
+    if (finite && !topology.planes.empty() &&
+        topology.settings.collisions.response != ResponseMode::None &&
+        holds_->catchImpacts(state_) > 0) {
+      // Again from the start, with the particles that met a plane held (contact_holds.hpp).
+      std::copy(substepStart_.begin(), substepStart_.end(), state_.position.begin());
+      std::copy(velocityStart_.begin(), velocityStart_.end(), state_.velocity.begin());
+      holds_->holdFor(*implicit_, state_, dt);
+      finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
+    }
+  } else {
+    finite = xpbd_ ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
+                   : integrate(topology, forces_, dt, state_, substepStart_);
+  }
   if (!finite) reportBlowUp(frame);
   clock.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
@@ -110,7 +125,7 @@ void Simulator::step(int frame) {
     stats_.failsafe.passes += failsafe.passes;
     clock.lap(Stage::Failsafe);
   }
-  if (holds_) holds_->update(*implicit_);
+  if (holds_) stats_.planeContacts += holds_->update(*implicit_);
 }
 
 void Simulator::beginFrame() {

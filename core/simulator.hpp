@@ -99,7 +99,8 @@ class Simulator {
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
   ForceBuffers forces_;
-  std::vector<Vec3> substepStart_;  ///< every particle's position at the start of the substep
+  std::vector<Vec3> substepStart_;   ///< every particle's position at the start of the substep
+  std::vector<Vec3> velocityStart_;  ///< and its velocity, to take an implicit step again
   std::optional<ImplicitEuler> implicit_;  ///< set under the implicit integrator
   std::optional<Xpbd> xpbd_;               ///< set under the XPBD integrator
   double contactEdgeLength_ = 0;  ///< for "auto" substeps of the integrators stable at any step

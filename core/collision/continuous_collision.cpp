@@ -102,6 +102,24 @@ void orientFromStart(Impact& impact, const std::array<const PointPath*, 4>& poin
   if (impact.normal.dot(separation) < 0) impact.normal = -impact.normal;
 }
 
+/// The first candidate time of the cubic (u × v) · w at which `meetAt` finds the primitives within
+/// the tolerance, its normal pointed from the second primitive to the first.
+template <typename MeetAt>
+std::optional<Impact> firstMeeting(const LinearVector& u, const LinearVector& v,
+                                   const LinearVector& w, double tolerance,
+                                   const std::array<const PointPath*, 4>& points, MeetAt meetAt) {
+  const double scale = crossScale(u, v);
+  if (scale == 0) return std::nullopt;
+  std::array<double, 8> times;
+  const int count = candidateTimes(tripleProduct(u, v, w), tolerance * scale, times);
+  for (int i = 0; i < count; ++i)
+    if (std::optional<Impact> impact = meetAt(times[i])) {
+      orientFromStart(*impact, points);
+      return impact;
+    }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Vec3d closestPointBarycentric(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
@@ -160,46 +178,34 @@ std::array<double, 2> closestSegmentParameters(const Vec3d& p0, const Vec3d& p1,
 std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, const PointPath& b,
                                        const PointPath& c, double tolerance) {
   const LinearVector ab = difference(b, a), ac = difference(c, a), ap = difference(p, a);
-  const double scale = crossScale(ab, ac);
-  if (scale == 0) return std::nullopt;
-  std::array<double, 8> times;
-  const int count = candidateTimes(tripleProduct(ab, ac, ap), tolerance * scale, times);
-  for (int i = 0; i < count; ++i) {
-    const double t = times[i];
-    const Vec3d pt = p.at(t), at = a.at(t), bt = b.at(t), ct = c.at(t);
-    const Vec3d bary = closestPointBarycentric(pt, at, bt, ct);
-    const Vec3d closest = bary[0] * at + bary[1] * bt + bary[2] * ct;
-    if ((pt - closest).norm() > tolerance) continue;
-    const Vec3d normal = (bt - at).cross(ct - at);
-    if (normal.squaredNorm() == 0) continue;
-    Impact impact{t, {1, -bary[0], -bary[1], -bary[2]}, normal.normalized()};
-    orientFromStart(impact, {&p, &a, &b, &c});
-    return impact;
-  }
-  return std::nullopt;
+  return firstMeeting(ab, ac, ap, tolerance, {&p, &a, &b, &c},
+                      [&](double t) -> std::optional<Impact> {
+                        const Vec3d pt = p.at(t), at = a.at(t), bt = b.at(t), ct = c.at(t);
+                        const Vec3d bary = closestPointBarycentric(pt, at, bt, ct);
+                        const Vec3d closest = bary[0] * at + bary[1] * bt + bary[2] * ct;
+                        const Vec3d normal = (bt - at).cross(ct - at);
+                        if ((pt - closest).norm() > tolerance || normal.squaredNorm() == 0)
+                          return std::nullopt;
+                        return Impact{t, {1, -bary[0], -bary[1], -bary[2]}, normal.normalized()};
+                      });
 }
 
 std::optional<Impact> edgeEdgeImpact(const PointPath& p0, const PointPath& p1, const PointPath& q0,
                                      const PointPath& q1, double tolerance) {
   const LinearVector dp = difference(p1, p0), dq = difference(q1, q0), r = difference(q0, p0);
-  const double scale = crossScale(dp, dq);
-  if (scale == 0) return std::nullopt;
-  std::array<double, 8> times;
-  const int count = candidateTimes(tripleProduct(dp, dq, r), tolerance * scale, times);
-  for (int i = 0; i < count; ++i) {
-    const double t = times[i];
-    const Vec3d a0 = p0.at(t), a1 = p1.at(t), b0 = q0.at(t), b1 = q1.at(t);
-    const Vec3d cross = (a1 - a0).cross(b1 - b0);
-    // Nearly parallel edges have no well-defined normal; their ends' vertex–face tests see them.
-    if (cross.squaredNorm() <= 1e-12 * (a1 - a0).squaredNorm() * (b1 - b0).squaredNorm()) continue;
-    const auto [s, u] = closestSegmentParameters(a0, a1, b0, b1);
-    const Vec3d gap = (a0 + s * (a1 - a0)) - (b0 + u * (b1 - b0));
-    if (gap.norm() > tolerance) continue;
-    Impact impact{t, {1 - s, s, -(1 - u), -u}, cross.normalized()};
-    orientFromStart(impact, {&p0, &p1, &q0, &q1});
-    return impact;
-  }
-  return std::nullopt;
+  return firstMeeting(
+      dp, dq, r, tolerance, {&p0, &p1, &q0, &q1}, [&](double t) -> std::optional<Impact> {
+        const Vec3d a0 = p0.at(t), a1 = p1.at(t), b0 = q0.at(t), b1 = q1.at(t);
+        const Vec3d cross = (a1 - a0).cross(b1 - b0);
+        // Nearly parallel edges have no well-defined normal; their ends' vertex–face tests see
+        // them.
+        if (cross.squaredNorm() <= 1e-12 * (a1 - a0).squaredNorm() * (b1 - b0).squaredNorm())
+          return std::nullopt;
+        const auto [s, u] = closestSegmentParameters(a0, a1, b0, b1);
+        const Vec3d gap = (a0 + s * (a1 - a0)) - (b0 + u * (b1 - b0));
+        if (gap.norm() > tolerance) return std::nullopt;
+        return Impact{t, {1 - s, s, -(1 - u), -u}, cross.normalized()};
+      });
 }
 
 }  // namespace softbake

@@ -6,13 +6,15 @@ namespace softbake {
 
 ContactHolds::ContactHolds(const SceneTopology& topology)
     : topology_(topology),
-      touchedPlane_(topology.planes.empty() ? 0 : topology.particleCount(), kNoPlane) {}
+      touchedPlane_(topology.planes.empty() ? 0 : topology.particleCount(), kNoPlane),
+      heldPlane_(touchedPlane_) {}
 
-void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt) const {
+void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt) {
   solver.releaseHolds();
   const Scalar skin = topology_.settings.skin;
   for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
     if (touchedPlane_[i] == kNoPlane) continue;
+    heldPlane_[i] = touchedPlane_[i];
     const PlaneCollider& plane = topology_.planes[touchedPlane_[i]];
     // The normal speed that ends the step at the skin, where the plane pass left it.
     const Scalar distance = plane.normal.dot(state.position[i] - plane.point);
@@ -20,11 +22,35 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
   }
 }
 
-void ContactHolds::update(const ImplicitEuler& solver) {
-  // Every hold is a plane hold. One that pulled its particle towards the plane ends; the plane
-  // pass, which ran after the step, caught the particle again only by rounding.
-  for (Index i : solver.heldParticles())
-    if (!(solver.holdImpulse(i) > 0)) touchedPlane_[i] = kNoPlane;
+std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
+  std::size_t caught = 0;
+  const Scalar skin = topology_.settings.skin;
+  for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
+    if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
+    for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
+      const PlaneCollider& plane = topology_.planes[p];
+      if (plane.normal.dot(state.position[i] - plane.point) >= skin) continue;
+      touchedPlane_[i] = std::int32_t(p);
+      ++caught;
+      break;
+    }
+  }
+  return caught;
+}
+
+std::size_t ContactHolds::update(const ImplicitEuler& solver) {
+  // Every hold is a plane hold. One that pulled its particle towards the plane ends, even where
+  // the plane pass caught the particle again (only by rounding).
+  std::size_t kept = 0;
+  for (Index i : solver.heldParticles()) {
+    if (!(solver.holdImpulse(i) > 0)) {
+      touchedPlane_[i] = kNoPlane;
+    } else if (touchedPlane_[i] == kNoPlane) {
+      touchedPlane_[i] = heldPlane_[i];
+      ++kept;
+    }
+  }
+  return kept;
 }
 
 }  // namespace softbake

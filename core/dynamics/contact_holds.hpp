@@ -34,15 +34,25 @@ class ContactHolds {
   std::span<std::int32_t> touchedPlane() { return touchedPlane_; }
 
   /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`.
-  void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt) const;
+  void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt);
+
+  /// After an implicit step, before its plane pass: marks every particle the step left on or
+  /// behind a plane that no hold held. Returns how many: when any, the caller takes the step
+  /// again from its start with those held too (holdFor), so that a particle meeting the ground is
+  /// stopped within the solve, which moves its neighbours with it, instead of being projected
+  /// back after it (a vertical sheet landing on its edge gained 0.5 J that way).
+  std::size_t catchImpacts(const SimulationState& state);
 
   /// After the step and its plane pass: lets go of the particles the plane pulled on, unless the
-  /// plane pass caught them again.
-  void update(const ImplicitEuler& solver);
+  /// plane pass caught them again, and keeps holding those it pushed, which the step left at the
+  /// skin, where the plane pass does not see them. Returns how many it kept that way: plane
+  /// contacts the plane pass did not count.
+  std::size_t update(const ImplicitEuler& solver);
 
  private:
   const SceneTopology& topology_;
   std::vector<std::int32_t> touchedPlane_;
+  std::vector<std::int32_t> heldPlane_;  ///< per particle: the plane of its hold in this step
 };
 
 }  // namespace softbake

@@ -402,6 +402,32 @@ fs::path golden(const std::string& name) {
   return fs::path(SOFTBAKE_SOURCE_DIR) / "tests/golden" / name;
 }
 
+class ContactExampleFrame : public CliTest,
+                            public ::testing::WithParamInterface<std::pair<const char*, int>> {};
+
+/// The hard contact cases (a ball on a pinned sheet, a mixed pile, a heavy ball on a jelly one,
+/// parts that start inside each other, a folding flag), each at one frame where its contact shows,
+/// against its golden frame.
+TEST_P(ContactExampleFrame, MatchesItsGoldenFrame) {
+  const auto [example, frame] = GetParam();
+  const fs::path out = folder_ / example;
+  const Result run =
+      runSoftbake("run " + quoted((examples() / (std::string(example) + ".json")).string()) +
+                  " --render --size 320x240 --frames " + std::to_string(frame) + " -q -o " +
+                  quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  char name[64];
+  std::snprintf(name, sizeof name, "%s_%04d.png", example, frame);
+  EXPECT_EQ(compareFrames(golden(name), out / "png" / name), 0) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(HardCases, ContactExampleFrame,
+                         ::testing::Values(std::pair("sheet_ball", 48), std::pair("mixed_pile", 48),
+                                           std::pair("heavy_on_jelly", 72),
+                                           std::pair("glued_assembly", 24),
+                                           std::pair("flag_fold", 48)),
+                         [](const auto& param) { return std::string(param.param.first); });
+
 TEST_F(CliTest, RenderedFramesMatchTheGoldenFrames) {
   renderSmall("", folder_ / "default");
   renderSmall((examples() / "fig5_ground.json").string(), folder_ / "fig5");
