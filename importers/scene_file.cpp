@@ -245,7 +245,7 @@ class SceneParser {
     if (value.isString()) return preset(value);
     if (!value.isObject()) value.fail("expected string (a preset) or object");
     const JsonObject object =
-        value.object({"preset", "stiffness", "bend_stiffness", "damping", "pressure"});
+        value.object({"preset", "stiffness", "bend_stiffness", "damping", "pressure", "thickness"});
     Material material = *findMaterialPreset("rubber");
     if (auto name = object.find("preset")) material = preset(*name);
     if (auto k = object.find("stiffness")) material.stiffness = Scalar(k->numberAbove(0));
@@ -253,6 +253,7 @@ class SceneParser {
       material.bendStiffness = Scalar(k->numberAtLeast(0));
     if (auto d = object.find("damping")) material.damping = Scalar(d->numberIn(0, 1));
     if (auto p = object.find("pressure")) material.pressure = Scalar(p->numberAtLeast(0));
+    if (auto t = object.find("thickness")) material.thickness = Scalar(t->numberAtLeast(0));
     return material;
   }
 

@@ -56,6 +56,13 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology, FailsafePass
       separation_(kSeparationOfSkin * failsafeSkin(topology)),
       broadPhase_(makeBroadPhase(BroadPhaseKind::Bvh)) {
   const CollisionGeometry& geometry = topology.collision;
+  thickness_.assign(geometry.surfaces.size(), 0.0);
+  margin_ = tolerance_;
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b)
+    if (!topology.bodies[b].closed) {
+      thickness_[b] = double(topology.bodies[b].material.thickness);
+      margin_ = std::max(margin_, thickness_[b]);
+    }
   const std::size_t triangles = geometry.triangleVertices.size();
   const std::size_t vertices = geometry.particleCount + geometry.staticVertex.size();
   // Ownership: the lowest-numbered triangle holding each vertex and each edge.
@@ -144,7 +151,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
                                     std::span<const Vec3> start, std::span<const Vec3> end,
                                     bool onlyMoved) {
   const CollisionGeometry& geometry = topology.collision;
-  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(tolerance_));
+  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(margin_));
   // The detector's cached pairs hold this stage's almost always: the response moves particles
   // far less than the cache's margin. Its own broad phase only when they do not.
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
@@ -160,7 +167,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   };
   // The box of each vertex's path, grown by the tolerance: most primitives of a candidate pair
   // are rejected by these before any cubic is formed.
-  const Scalar grow = Scalar(tolerance_);
+  const Scalar grow = Scalar(margin_);
   pathBoxes_.resize(particles + geometry.staticVertex.size());
   tbb::parallel_for(tbb::blocked_range<Index>(0, Index(pathBoxes_.size()), 4096),
                     [&](const tbb::blocked_range<Index>& range) {
@@ -185,8 +192,12 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
       if (onlyMoved && !triangleMoved(first) && !triangleMoved(second)) continue;
       // Within one surface the triangles around a vertex may not all pair (neighbours of the
       // other triangle are not eligible), so there every primitive is tested and duplicates go.
-      const bool everyPrimitive =
-          geometry.triangleSurface[first] == geometry.triangleSurface[second];
+      const Index firstSurface = geometry.triangleSurface[first];
+      const Index secondSurface = geometry.triangleSurface[second];
+      const bool everyPrimitive = firstSurface == secondSurface;
+      const double thickness = std::max(thickness_[firstSurface], thickness_[secondSurface]);
+      const double tolerance = std::max(tolerance_, thickness);
+      const double separation = std::max(separation_, thickness);
       const auto vertexFace = [&](Index from, Index face) {
         const Triangle& f = geometry.triangleVertices[face];
         for (int k = 0; k < 3; ++k) {
@@ -196,8 +207,8 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
           if (!pathBox(p).intersects(boxes_[face])) continue;
           const std::optional<Impact> impact = vertexFaceImpact(
               path(geometry, start, end, p), path(geometry, start, end, f[0]),
-              path(geometry, start, end, f[1]), path(geometry, start, end, f[2]), tolerance_);
-          if (impact) found.push_back({{p, f[0], f[1], f[2]}, face, false, *impact});
+              path(geometry, start, end, f[1]), path(geometry, start, end, f[2]), tolerance);
+          if (impact) found.push_back({{p, f[0], f[1], f[2]}, face, false, separation, *impact});
         }
       };
       vertexFace(first, second);
@@ -233,8 +244,8 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
               p0 < q0 ? std::array{p0, p1, q0, q1} : std::array{q0, q1, p0, p1};
           const std::optional<Impact> impact = edgeEdgeImpact(
               path(geometry, start, end, v[0]), path(geometry, start, end, v[1]),
-              path(geometry, start, end, v[2]), path(geometry, start, end, v[3]), tolerance_);
-          if (impact) found.push_back({v, 0, true, *impact});
+              path(geometry, start, end, v[2]), path(geometry, start, end, v[3]), tolerance);
+          if (impact) found.push_back({v, 0, true, separation, *impact});
         }
       }
     }
@@ -295,8 +306,8 @@ void CollisionFailsafe::applyImpulses(const SceneTopology& topology, SimulationS
     }
     for (Index v : meeting.vertex)
       if (v < particles) moved_[v] = 1;  // measured again next pass, resolved or not
-    if (gap >= separation_ || resistance <= 0) continue;
-    const double impulse = (separation_ - gap) / resistance;
+    if (gap >= meeting.separation || resistance <= 0) continue;
+    const double impulse = (meeting.separation - gap) / resistance;
     for (int i = 0; i < 4; ++i) {
       if (inverseMass[i] == 0) continue;
       const Vec3d shift = inverseMass[i] * meeting.impact.weight[i] * impulse * normal;

@@ -16,6 +16,9 @@
 ///    normal that leaves the two primitives `separation` apart at the end of the substep (a
 ///    displacement, and the velocity change that makes it), applied one after the other in a
 ///    fixed order. It conserves momentum; static triangles and pinned particles do not move.
+///    An open surface (a sheet, a flag) has no inside to keep anything out of, so it gets a
+///    two-sided skin instead: its material's thickness. Primitives of a sheet meet anything that
+///    comes within its thickness, and are left that far apart.
 /// 2. Impact zones, when passes of impulses leave meetings: the particles of every meeting are
 ///    merged into zones, and each zone moves as one over the substep, with its mean velocity
 ///    (momentum conserved). A translated zone cannot cross itself, zones that meet are merged,
@@ -63,8 +66,9 @@ struct FailsafeStats {
 /// One meeting of two primitives: vertices in the order of Impact::weight.
 struct FailsafeImpact {
   std::array<Index, 4> vertex{};
-  Index face = 0;     ///< the struck triangle of a vertex–face meeting
-  bool edge = false;  ///< an edge–edge meeting
+  Index face = 0;         ///< the struck triangle of a vertex–face meeting
+  bool edge = false;      ///< an edge–edge meeting
+  double separation = 0;  ///< how far apart it leaves them: the thicker side's thickness, or more
   Impact impact;
 };
 
@@ -113,8 +117,10 @@ class CollisionFailsafe {
 
   FailsafePasses passes_;
   double tolerance_, separation_;
-  std::vector<Box3> boxes_;      ///< per collision triangle, over the substep
-  std::vector<Box3> pathBoxes_;  ///< per collision vertex, over the substep
+  std::vector<double> thickness_;  ///< per surface: an open body's material thickness, else 0
+  double margin_ = 0;              ///< boxes grow by it: the tolerance or the largest thickness
+  std::vector<Box3> boxes_;        ///< per collision triangle, over the substep
+  std::vector<Box3> pathBoxes_;    ///< per collision vertex, over the substep
   std::unique_ptr<BroadPhase> broadPhase_;
   PairCache pairCache_;
   std::vector<TrianglePair> pairs_;

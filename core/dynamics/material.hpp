@@ -22,6 +22,12 @@ struct Material {
   /// Gas pressure at the rest volume, Pa. The gas amount is fixed from it: nRT = pressure·V_rest,
   /// and P = nRT/V afterwards (Matyka & Ollila). Ignored on open meshes.
   Scalar pressure = 100;
+  /// An open surface's two-sided skin, scene units: the collision failsafe keeps particles and
+  /// edges on either side of a sheet at least this far from it (core/collision/failsafe.hpp). A
+  /// sheet has no inside, so nothing else gives it a side to be on. Ignored on closed meshes. It
+  /// should stay well under the mesh's edge length: the sheet's own vertices closer than it would
+  /// push each other apart.
+  Scalar thickness = Scalar(0.0005);
 };
 
 struct NamedMaterial {

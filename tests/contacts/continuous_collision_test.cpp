@@ -8,8 +8,12 @@
 #include <Eigen/LU>
 #include <random>
 
+#include "tests/support/point_triangle_distance.hpp"
+
 namespace softbake {
 namespace {
+
+using test::pointTriangleDistance;
 
 constexpr double kTolerance = 1e-6;
 
@@ -18,20 +22,6 @@ PointPath still(double x, double y, double z) {
 }
 PointPath moving(const Vec3d& from, const Vec3d& to) {
   return {from, to};
-}
-
-double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  // Brute force: the closest of the interior projection (when inside) and the three edges.
-  const Vec3d n = (b - a).cross(c - a).normalized();
-  const Vec3d q = p - n.dot(p - a) * n;
-  const auto inside = [&](const Vec3d& x, const Vec3d& y) { return (y - x).cross(q - x).dot(n); };
-  double best = std::numeric_limits<double>::infinity();
-  if (inside(a, b) >= 0 && inside(b, c) >= 0 && inside(c, a) >= 0) best = (p - q).norm();
-  for (const auto& [x, y] : {std::pair(a, b), std::pair(b, c), std::pair(c, a)}) {
-    const double s = std::clamp((p - x).dot(y - x) / (y - x).squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (p - (x + s * (y - x))).norm());
-  }
-  return best;
 }
 
 double pointSegmentDistance(const Vec3d& p, const Vec3d& x, const Vec3d& y) {

@@ -12,6 +12,7 @@
 #include "core/dynamics/material.hpp"
 #include "tests/core/test_worlds.hpp"
 #include "tests/support/intersection_checker.hpp"
+#include "tests/support/point_triangle_distance.hpp"
 
 namespace softbake {
 namespace {
@@ -138,6 +139,30 @@ TEST(Failsafe, ABallCannotPassThroughASheetWithinOneSubstep) {
       sheetUnderBall = std::max(sheetUnderBall, x.y());
   }
   EXPECT_GT(lowestBall, sheetUnderBall);
+}
+
+TEST(Failsafe, ASheetKeepsWhatNearsItAtItsThickness) {
+  SceneSetup setup = noGravity();
+  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
+  flat.material.thickness = 0.004f;
+  // The ball's lowest vertex from 1 cm above the sheet to 1 mm above it: no crossing, but inside
+  // the sheet's thickness.
+  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
+  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
+  const FailsafeStats stats = step.apply();
+  EXPECT_GT(stats.impacts, 0u);
+  // Every ball vertex against every sheet triangle, by the tests' own distance.
+  const Body& sheetBody = step.scene.topology.bodies[0];
+  const Body& ballBody = step.scene.topology.bodies[1];
+  const std::vector<Vec3>& x = step.scene.state.position;
+  double nearest = 1e9;
+  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
+    for (const Triangle& t : step.scene.topology.bodyTriangles(sheetBody))
+      nearest = std::min(
+          nearest, test::pointTriangleDistance(x[p].cast<double>(), x[t[0]].cast<double>(),
+                                               x[t[1]].cast<double>(), x[t[2]].cast<double>()));
+  EXPECT_GE(nearest, 0.004 * 0.999);
+  EXPECT_LT(nearest, 0.008);  // several meetings on one vertex may each push it: within 2x
 }
 
 TEST(Failsafe, AStackPushedIntoTheGroundStaysAboveIt) {

@@ -73,7 +73,7 @@ TEST(SceneFile, ReadsEveryKey) {
                 "merge_meshes": true,
                 "transform": {"translate": [1, 2, 3], "rotate": [0, 0, 0], "scale": 0.5},
                 "material": {"preset": "jelly", "stiffness": 123, "bend_stiffness": 0,
-                             "damping": 1, "pressure": 0},
+                             "damping": 1, "pressure": 0, "thickness": 0.01},
                 "mass": 2.5, "velocity": [1, 0, -1],
                 "pins": {"indices": [0, 7], "boxes": [{"min": [-1, -1, -1], "max": [1, 1, 1]}]}}],
     "colliders": [{"type": "plane", "name": "floor", "point": [0, -1, 0], "normal": [0, 2, 0],
@@ -102,6 +102,7 @@ TEST(SceneFile, ReadsEveryKey) {
   EXPECT_EQ(body.material.bendStiffness, 0);
   EXPECT_EQ(body.material.damping, 1);
   EXPECT_EQ(body.material.pressure, 0);
+  EXPECT_EQ(body.material.thickness, Scalar(0.01));
   EXPECT_NE(jelly.stiffness, 123);
   EXPECT_EQ(body.mass, Scalar(2.5));
   EXPECT_EQ(body.velocity, Vec3(1, 0, -1));
