@@ -340,13 +340,25 @@ TEST(VdbSequenceWriter, OpenBodyGetsAnUnsignedDistanceField) {
 }
 
 TEST(VdbSequenceWriter, AutomaticVoxelSizeIsHalfTheMeanEdge) {
-  const auto world = makeBallsTopology({1.0f}, 2);
+  // A cube of side a, two triangles a face: each triangle has two sides of a and a diagonal of
+  // a·√2, so the mean edge is a·(2 + √2)/3, counted per triangle or per edge alike.
+  constexpr double kSide = 0.3;
+  SceneSetup setup;
+  BodySetup cube;
+  cube.name = "cube";
+  for (int corner = 0; corner < 8; ++corner)  // corner = x + 2y + 4z
+    cube.mesh.positions.emplace_back(float(kSide) * float(corner & 1),
+                                     float(kSide) * float((corner >> 1) & 1),
+                                     float(kSide) * float((corner >> 2) & 1));
+  cube.mesh.triangles = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                         {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+  setup.bodies.push_back(cube);
+  const SceneTopology world = buildSceneTopology(setup);
+  ASSERT_TRUE(world.bodies[0].closed);
   ScratchDirectory out;
-  VdbSequenceWriter writer(*world, out.path(), "auto", VdbOptions{});
-  EXPECT_DOUBLE_EQ(writer.voxelSize(), autoVoxelSize(*world));
-  // Level 2 of a unit icosphere: edges of about 0.3.
-  EXPECT_GT(writer.voxelSize(), 0.1);
-  EXPECT_LT(writer.voxelSize(), 0.2);
+  VdbSequenceWriter writer(world, out.path(), "auto", VdbOptions{});
+  const double expected = 0.5 * kSide * (2 + std::sqrt(2.0)) / 3;
+  EXPECT_NEAR(writer.voxelSize(), expected, 1e-7 * expected);
 }
 
 TEST(VdbSequenceWriter, BadSettingsFailBeforeAnyFileIsWritten) {
