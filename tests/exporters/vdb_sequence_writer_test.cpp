@@ -181,7 +181,7 @@ TEST(VdbSequenceWriter, BloscCompressionRoundTrips) {
   EXPECT_EQ(file.names(), (std::vector<std::string>{"surface", "vel"}));
 }
 
-TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
+TEST(VdbSequenceWriter, ZeroCrossingLiesWithinSevenHundredthsOfAVoxelOfTheMesh) {
   const auto world = makeBallsTopology({1.0f}, 3);
   ScratchDirectory out;
   VdbOptions options;
@@ -205,10 +205,11 @@ TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
       worst = std::max(worst, std::abs(double(sdf.wsSample(openvdb::Vec3d(p.x(), p.y(), p.z())))));
     }
   RecordProperty("worst_distance_in_voxels", std::to_string(worst / options.voxelSize));
-  EXPECT_LE(worst, options.voxelSize);
+  // Measured 0.056 voxels: the trilinear sample of exact distances across the surface's curve.
+  EXPECT_LE(worst, 0.07 * options.voxelSize);
 }
 
-TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
+TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinSevenHundredthsOfAPercent) {
   const auto world = makeBallsTopology({1.0f}, 4);
   ScratchDirectory out;
   VdbOptions options;
@@ -229,7 +230,8 @@ TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
   const double expected = meshVolume(world, world->bodies[0]);
   RecordProperty("relative_volume_error",
                  std::to_string((voxels * dx * dx * dx - expected) / expected));
-  EXPECT_NEAR(voxels * dx * dx * dx, expected, 0.01 * expected);
+  // Measured 0.053% more than the mesh.
+  EXPECT_NEAR(voxels * dx * dx * dx, expected, 7e-4 * expected);
 }
 
 TEST(VdbSequenceWriter, VelocityAtTheSurfaceMatchesTheParticles) {
