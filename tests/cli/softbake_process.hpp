@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -54,7 +55,9 @@ class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("softbake_cli_") + info->test_suite_name() + "_" + info->name();
+    // The process id keeps runs of the suite from other checkouts out of each other's way.
+    std::string name = std::string("softbake_cli_") + info->test_suite_name() + "_" + info->name() +
+                       "_" + std::to_string(::getpid());
     for (char& c : name)
       if (c == '/') c = '_';  // parameterised tests
     folder_ = std::filesystem::temp_directory_path() / name;
