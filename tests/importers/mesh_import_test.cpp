@@ -23,8 +23,8 @@ struct SharedMesh {
   std::size_t particles;  ///< distinct positions that a triangle uses
   std::size_t triangles;
   bool closed;  ///< watertight after the weld
-  std::string (*generate)() =
-      nullptr;  ///< a stand-in written by the test, not a file in tests/data
+  /// Writes a stand-in for the file, which then is not one of tests/data; null for the others.
+  std::string (*generate)() = nullptr;
 };
 
 using test::ScanPly;
