@@ -234,9 +234,11 @@ int bench(const BenchOptions& options) {
                                                       options.broadPhases.end());
   if (broadPhases.empty()) broadPhases.emplace_back();  // the scene's
 
-  std::string csv =
-      "broadphase,step,frame,forces_ms,integration_ms,boxes_ms,broad_phase_ms,narrow_phase_ms,"
-      "response_ms,planes_ms,step_ms,pairs,contacts\n";
+  // One column per stage, named as the stages name themselves, so a new stage cannot leave the
+  // header a column short.
+  std::string csv = "broadphase,step,frame,";
+  for (int stage = 0; stage < kStageCount; ++stage) csv += cat(stageName(Stage(stage)), "_ms,");
+  csv += "step_ms,pairs,contacts\n";
   std::optional<ScratchFolder> scratch;
   if (options.withExports && options.out.empty()) scratch.emplace();
   const fs::path exportFolder = scratch ? scratch->path() : options.out;

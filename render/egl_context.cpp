@@ -72,6 +72,7 @@ struct Attempt {
   EGLContext context = EGL_NO_CONTEXT;
   EGLSurface surface = EGL_NO_SURFACE;
   std::string failure;
+  bool initialised = false;  ///< a display came up, even if the context then failed
 };
 
 /// Initialises `display` and creates and binds an OpenGL ≥ 3.3 core context on it. On failure
@@ -94,7 +95,7 @@ Attempt createContext(EGLDisplay display) {
     }
     if (attempt.surface != EGL_NO_SURFACE) eglDestroySurface(display, attempt.surface);
     // Not eglTerminate: the display is shared by every context of the process on this platform.
-    return Attempt{EGL_NO_DISPLAY, EGL_NO_CONTEXT, EGL_NO_SURFACE, std::move(reason)};
+    return Attempt{EGL_NO_DISPLAY, EGL_NO_CONTEXT, EGL_NO_SURFACE, std::move(reason), true};
   };
   if (!eglBindAPI(EGL_OPENGL_API))
     return fail(cat("EGL ", major, ".", minor, " has no desktop OpenGL (", lastEglError(), ")"));
@@ -139,6 +140,7 @@ Attempt createContext(EGLDisplay display) {
   if (!eglMakeCurrent(display, attempt.surface, attempt.surface, attempt.context))
     return fail(cat("eglMakeCurrent failed (", lastEglError(), ")"));
   attempt.display = display;
+  attempt.initialised = true;
   return attempt;
 }
 
@@ -171,6 +173,7 @@ Attempt tryDevices(std::string& name) {
     return {EGL_NO_DISPLAY, EGL_NO_CONTEXT, EGL_NO_SURFACE,
             cat("eglQueryDevicesEXT found no device (", lastEglError(), ")")};
   std::string failures;
+  bool initialised = false;
   for (EGLint i = 0; i < count; ++i) {
     Attempt attempt =
         createContext(getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr));
@@ -179,8 +182,9 @@ Attempt tryDevices(std::string& name) {
       return attempt;
     }
     failures += cat(i ? "; " : "", "device ", i, ": ", attempt.failure);
+    initialised = initialised || attempt.initialised;
   }
-  return {EGL_NO_DISPLAY, EGL_NO_CONTEXT, EGL_NO_SURFACE, failures};
+  return {EGL_NO_DISPLAY, EGL_NO_CONTEXT, EGL_NO_SURFACE, failures, initialised};
 }
 
 Attempt tryRawPlatform(const std::string& text) {
@@ -207,7 +211,9 @@ std::string requestedEglPlatform(const EglOptions& options) {
 EglContext::EglContext(const EglOptions& options) {
   const std::string requested = requestedEglPlatform(options);
   std::string failures;
+  bool anyDisplay = false;
   auto consider = [&](const std::string& name, Attempt attempt) {
+    anyDisplay = anyDisplay || attempt.initialised;
     if (display_ || attempt.display == EGL_NO_DISPLAY) {
       if (!display_) failures += cat(failures.empty() ? "" : "; ", name, ": ", attempt.failure);
       return;
@@ -228,9 +234,12 @@ EglContext::EglContext(const EglOptions& options) {
     consider("default", createContext(eglGetDisplay(EGL_DEFAULT_DISPLAY)));
   if (!automatic && requested != "surfaceless" && requested != "device" && requested != "default")
     consider(cat("platform ", requested), tryRawPlatform(requested));
-  if (!display_)
-    throw Error(cat("cannot create an off-screen OpenGL 3.3 context through EGL (", failures, "). ",
-                    kInstallHint));
+  if (!display_) {
+    const std::string message = cat("cannot create an off-screen OpenGL 3.3 context through EGL (",
+                                    failures, "). ", kInstallHint);
+    if (!anyDisplay) throw EglDisplayUnavailable(message);
+    throw Error(message);
+  }
 }
 
 EglContext::~EglContext() {

@@ -10,7 +10,18 @@
 
 #include <string>
 
+#include "core/error.hpp"
+
 namespace softbake {
+
+/// What EglContext throws when no EGL platform gives a display that initialises: the machine has
+/// no EGL driver at all (a container without libegl-mesa0, say), so nothing can render here. Any
+/// later failure, such as a display without OpenGL 3.3, is a plain softbake::Error: there is a
+/// driver, and it failed. Tests skip on the first and fail on the second.
+class EglDisplayUnavailable : public Error {
+ public:
+  using Error::Error;
+};
 
 struct EglOptions {
   /// "auto" (the order above), "surfaceless", "device", "default", or a raw EGL platform enum in
@@ -28,7 +39,7 @@ std::string requestedEglPlatform(const EglOptions& options);
 class EglContext {
  public:
   /// Creates the context and makes it current. Throws softbake::Error naming what is missing and
-  /// the packages to install; never hangs.
+  /// the packages to install, EglDisplayUnavailable when not even a display came up; never hangs.
   explicit EglContext(const EglOptions& options = {});
   /// Releases the context from this thread (when current here) and destroys it.
   ~EglContext();

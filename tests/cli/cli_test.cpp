@@ -13,69 +13,25 @@
 #include <tuple>
 #include <vector>
 
+#include "softbake_process.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int exitCode = -1;  // -1: killed by a signal
-  std::string output;
-};
+using softbake::test::CliTest;
+using softbake::test::quoted;
+using softbake::test::readFile;
+using softbake::test::Result;
+using softbake::test::runSoftbake;
 
-std::string quoted(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-Result runSoftbake(const std::string& arguments) {
-  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
+/// The meshes in the repository (tests/data/meshes): a missing one fails its test.
 fs::path meshes() {
-  return SOFTBAKE_SHARED_MESHES_DIR;
+  return SOFTBAKE_TEST_MESHES_DIR;
 }
-
-#define SKIP_WITHOUT_SHARED_MESHES() \
-  if (!fs::is_directory(meshes())) GTEST_SKIP() << "shared meshes not found at " << meshes()
 fs::path examples() {
   return fs::path(SOFTBAKE_SOURCE_DIR) / "examples";
 }
-
-/// A fresh folder per test under the system temp folder, removed afterwards.
-class CliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    folder_ = fs::temp_directory_path() / (std::string("softbake_cli_") + info->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
-
-  fs::path writeScene(const std::string& name, const std::string& text) {
-    const fs::path path = folder_ / name;
-    std::ofstream(path) << text;
-    return path;
-  }
-
-  fs::path folder_;
-};
 
 }  // namespace
 
@@ -115,7 +71,6 @@ TEST_F(CliTest, OutputIsByteIdenticalForOneAndTwoThreads) {
 }
 
 TEST_F(CliTest, AMeshFileRunsAsASoftBodyNamedAfterTheFile) {
-  SKIP_WITHOUT_SHARED_MESHES();
   const fs::path source = folder_ / "my ball.off";  // a space: the scene name must be made safe
   fs::copy_file(meshes() / "ballA.off", source);
   const fs::path out = folder_ / "out";
@@ -158,7 +113,6 @@ TEST_F(CliTest, ASceneNameThatCannotNameFilesIsRefused) {
 }
 
 TEST_F(CliTest, EmptyMeshFileIsAnErrorNotACrash) {
-  SKIP_WITHOUT_SHARED_MESHES();
   const Result run = runSoftbake("run " + quoted((meshes() / "broken/empty.obj").string()) +
                                  " -o " + quoted((folder_ / "o").string()));
   EXPECT_EQ(run.exitCode, 1) << run.output;
@@ -166,7 +120,6 @@ TEST_F(CliTest, EmptyMeshFileIsAnErrorNotACrash) {
 }
 
 TEST_F(CliTest, PlyThatCrashesAssimpIsRefusedWithAMessage) {
-  SKIP_WITHOUT_SHARED_MESHES();
   const fs::path crash = meshes() / "broken/crash-30d6d0f7c529b3b66b4131700b7a4580cd7082df.ply";
   ASSERT_TRUE(fs::exists(crash));
   const Result run =

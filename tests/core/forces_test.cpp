@@ -77,8 +77,13 @@ TEST(Pins, PinnedParticlesDoNotMoveUnderGravityUnderEitherIntegrator) {
     for (int frame = 2; frame <= 24; ++frame) simulator.advanceToFrame(frame);
     for (Index i : pinned)
       EXPECT_EQ(simulator.state().position[i], start[i]) << integratorName(integrator);
-    // The rest hangs: the bottom sagged.
-    EXPECT_LT(test::centroid(simulator.state()).y(), 1.0) << integratorName(integrator);
+    // The rest hangs: after a second the centroid has sagged by 2.2 mm (implicit), 2.3 (XPBD) or
+    // 2.7 (explicit); at rest it would be at 1 to float precision.
+    const double sag = 1.0 - test::centroid(simulator.state()).y();
+    RecordProperty(std::string("sag_") + std::string(integratorName(integrator)),
+                   std::to_string(sag));
+    EXPECT_GT(sag, 0.0018) << integratorName(integrator);
+    EXPECT_LT(sag, 0.0033) << integratorName(integrator);
   }
 }
 

@@ -51,15 +51,10 @@ class RecordingSink : public FrameSink {
   int failAt_;
 };
 
-/// Blocks every write until the test opens it: a disk that is as slow as the test wants.
-class GateSink : public FrameSink {
+/// A gate the test opens, and what went through it; kept outside the sink, which the pipeline
+/// owns and destroys.
+class Gate {
  public:
-  void write(const Frame& frame) override {
-    std::unique_lock lock(mutex_);
-    opened_.wait(lock, [&] { return open_; });
-    numbers_.push_back(frame.number);
-  }
-  const char* name() const override { return "gate"; }
   void open() {
     {
       std::lock_guard lock(mutex_);
@@ -71,12 +66,46 @@ class GateSink : public FrameSink {
     std::lock_guard lock(mutex_);
     return numbers_;
   }
+  int finishCalls() {
+    std::lock_guard lock(mutex_);
+    return finishCalls_;
+  }
+  /// Waits until a write is held at the gate.
+  void waitForAWrite() {
+    std::unique_lock lock(mutex_);
+    arrived_.wait(lock, [&] { return waiting_ > 0; });
+  }
 
  private:
+  friend class GateSink;
   std::mutex mutex_;
-  std::condition_variable opened_;
+  std::condition_variable opened_, arrived_;
+  int waiting_ = 0;
   bool open_ = false;
   std::vector<int> numbers_;
+  int finishCalls_ = 0;
+};
+
+/// Blocks every write until the test opens its gate: a disk that is as slow as the test wants.
+class GateSink : public FrameSink {
+ public:
+  explicit GateSink(Gate& gate) : gate_(gate) {}
+  void write(const Frame& frame) override {
+    std::unique_lock lock(gate_.mutex_);
+    ++gate_.waiting_;
+    gate_.arrived_.notify_all();
+    gate_.opened_.wait(lock, [&] { return gate_.open_; });
+    --gate_.waiting_;
+    gate_.numbers_.push_back(frame.number);
+  }
+  void finish() override {
+    std::lock_guard lock(gate_.mutex_);
+    ++gate_.finishCalls_;
+  }
+  const char* name() const override { return "gate"; }
+
+ private:
+  Gate& gate_;
 };
 
 void fill(Frame& frame, int number) {
@@ -127,9 +156,8 @@ TEST(FramePipeline, EverySinkSeesEveryFrameInOrder) {
 TEST(FramePipeline, SlowSinkHoldsTheProducerBackWithoutNewBuffers) {
   constexpr std::size_t kDepth = 2;
   constexpr int kFrames = 10;
-  auto gate = std::make_unique<GateSink>();
-  GateSink& sink = *gate;
-  FramePipeline pipeline(sinks(std::move(gate)), 50, kDepth);
+  Gate gate;
+  FramePipeline pipeline(sinks(std::make_unique<GateSink>(gate)), 50, kDepth);
 
   std::atomic<int> submitted{0};
   std::set<const Frame*> frames;
@@ -150,12 +178,12 @@ TEST(FramePipeline, SlowSinkHoldsTheProducerBackWithoutNewBuffers) {
   EXPECT_EQ(submitted.load(), int(kDepth));
   EXPECT_EQ(pipeline.framesWritten(0), 0u);
 
-  sink.open();
+  gate.open();
   producer.join();
   pipeline.finish();
   std::vector<int> expected(kFrames);
   for (int n = 1; n <= kFrames; ++n) expected[std::size_t(n - 1)] = n;
-  EXPECT_EQ(sink.numbers(), expected);
+  EXPECT_EQ(gate.numbers(), expected);
   EXPECT_EQ(frames.size(), kDepth);
   EXPECT_EQ(buffers.size(), kDepth);
 }
@@ -209,21 +237,51 @@ TEST(FramePipeline, SinkFinishErrorIsRethrownFromFinish) {
   EXPECT_EQ(pipeline.framesWritten(0), 3u);
 }
 
-TEST(FramePipeline, DestructorStopsThreadsAfterAnErrorWithoutFinish) {
+TEST(FramePipeline, AFailureStopsEverySinkAfterTheFrameItIsWritingAndFinishesNone) {
+  // The gate holds frame 1 in its sink while the other sink writes frames 1 and 2 and fails on
+  // 3, the last of them: not before every frame is submitted, which would throw from submit().
   Record failing;
-  {
-    FramePipeline pipeline(sinks(std::make_unique<RecordingSink>(failing, 1)), 10, 2);
-    Frame& frame = pipeline.acquire();
-    fill(frame, 1);
-    pipeline.submit(frame);
+  Gate slow;
+  auto pipeline = std::make_unique<FramePipeline>(
+      sinks(std::make_unique<GateSink>(slow), std::make_unique<RecordingSink>(failing, 3)), 10, 3);
+  for (int n = 1; n <= 3; ++n) {
+    if (n == 3) slow.waitForAWrite();  // frame 1 is being written when the failure comes
+    Frame& frame = pipeline->acquire();
+    fill(frame, n);
+    pipeline->submit(frame);
   }
-  EXPECT_TRUE(failing.numbers.empty());
+  // Every buffer is out, so acquire() returns only through the failure, which has stopped the
+  // threads by the time it is seen.
+  EXPECT_THROW(pipeline->acquire(), Error);
+  slow.open();
+  pipeline.reset();
+  EXPECT_EQ(slow.numbers(), std::vector<int>{1}) << "frames 2 and 3 are dropped, not written";
+  EXPECT_EQ(slow.finishCalls(), 0);
+  EXPECT_EQ(failing.numbers, (std::vector<int>{1, 2}));
+  EXPECT_EQ(failing.finishCalls, 0);
 }
 
-TEST(FramePipeline, DestructorStopsIdleThreads) {
-  Record record;
-  FramePipeline pipeline(sinks(std::make_unique<RecordingSink>(record)), 10);
-  EXPECT_EQ(pipeline.depth(), 3u);
+TEST(FramePipeline, DestructorWithoutFinishStopsTheThreadsAndFinishesNoSink) {
+  Record idle, busy;
+  {
+    // No frame at all: the threads are waiting for one when the destructor comes.
+    FramePipeline pipeline(sinks(std::make_unique<RecordingSink>(idle)), 10);
+    EXPECT_EQ(pipeline.depth(), 3u);
+  }
+  EXPECT_TRUE(idle.numbers.empty());
+  EXPECT_EQ(idle.finishCalls, 0) << "the destructor is an abort, not finish()";
+  {
+    // Frames written, then the destructor instead of finish(): still no finish() on the sink.
+    FramePipeline pipeline(sinks(std::make_unique<RecordingSink>(busy)), 10, 2);
+    for (int n = 1; n <= 2; ++n) {
+      Frame& frame = pipeline.acquire();
+      fill(frame, n);
+      pipeline.submit(frame);
+    }
+    while (pipeline.framesWritten(0) < 2) std::this_thread::yield();
+  }
+  EXPECT_EQ(busy.numbers, (std::vector<int>{1, 2}));
+  EXPECT_EQ(busy.finishCalls, 0);
 }
 
 TEST(FramePipeline, RejectsFramesItDidNotHandOut) {
@@ -241,15 +299,23 @@ TEST(FramePipeline, RejectsFramesItDidNotHandOut) {
   EXPECT_EQ(record.numbers, std::vector<int>{1});
 }
 
-TEST(FramePipeline, RunsWithoutSinks) {
+TEST(FramePipeline, RunsWithoutSinksHandingTheSameBufferBackAtOnce) {
+  // With nobody to write it, a submitted frame is free again at once: one buffer serves every
+  // frame, where a frame kept queued would leave the second acquire() waiting.
   FramePipeline pipeline({}, 5, 1);
+  EXPECT_EQ(pipeline.sinkCount(), 0u);
+  const Frame* first = nullptr;
   for (int n = 1; n <= 3; ++n) {
     Frame& frame = pipeline.acquire();
+    if (!first) first = &frame;
+    EXPECT_EQ(&frame, first) << "frame " << n;
+    EXPECT_EQ(frame.positions.size(), 5u);
     fill(frame, n);
     pipeline.submit(frame);
   }
   pipeline.finish();
   EXPECT_EQ(pipeline.bytesWritten(), 0u);
+  EXPECT_THROW(pipeline.acquire(), Error);
 }
 
 TEST(FramePipeline, ObjWriteFailingMidRunLeavesNoPartialFile) {

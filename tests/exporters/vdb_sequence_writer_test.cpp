@@ -169,19 +169,33 @@ TEST(VdbSequenceWriter, SingleBodyUsesPlainNamesAndWritesFog) {
 }
 
 TEST(VdbSequenceWriter, BloscCompressionRoundTrips) {
-  if (!bloscAvailable()) GTEST_SKIP() << "this OpenVDB has no Blosc";
+  // Not a skip: Debian's OpenVDB has Blosc, and --vdb-compression blosc is documented.
+  ASSERT_TRUE(bloscAvailable()) << "this OpenVDB has no Blosc";
   const auto world = makeBallsTopology({1.0f});
   ScratchDirectory out;
   VdbOptions options;
   options.voxelSize = 0.1;
+  options.compression = VdbOptions::Compression::None;
+  VdbSequenceWriter plain(*world, out.path(), "plain", options);
+  plain.write(restFrame(world, 2));
   options.compression = VdbOptions::Compression::Blosc;
-  VdbSequenceWriter writer(*world, out.path(), "b", options);
-  writer.write(restFrame(world, 2));
+  VdbSequenceWriter blosc(*world, out.path(), "b", options);
+  blosc.write(restFrame(world, 2));
+  EXPECT_LT(blosc.bytesWritten(), plain.bytesWritten());
   const ReadBack file(out.path() / "vdb" / "b_0002.vdb");
   EXPECT_EQ(file.names(), (std::vector<std::string>{"surface", "vel"}));
+  // The same voxels as the uncompressed file, bit for bit.
+  const auto surface = file.get<openvdb::FloatGrid>("surface");
+  const auto reference =
+      ReadBack(out.path() / "vdb" / "plain_0002.vdb").get<openvdb::FloatGrid>("surface");
+  ASSERT_TRUE(surface && reference);
+  EXPECT_EQ(surface->activeVoxelCount(), reference->activeVoxelCount());
+  const auto values = reference->getConstAccessor();
+  for (auto v = surface->cbeginValueOn(); v; ++v)
+    ASSERT_EQ(*v, values.getValue(v.getCoord())) << v.getCoord();
 }
 
-TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
+TEST(VdbSequenceWriter, ZeroCrossingLiesWithinSevenHundredthsOfAVoxelOfTheMesh) {
   const auto world = makeBallsTopology({1.0f}, 3);
   ScratchDirectory out;
   VdbOptions options;
@@ -205,10 +219,11 @@ TEST(VdbSequenceWriter, ZeroCrossingLiesWithinOneVoxelOfTheMesh) {
       worst = std::max(worst, std::abs(double(sdf.wsSample(openvdb::Vec3d(p.x(), p.y(), p.z())))));
     }
   RecordProperty("worst_distance_in_voxels", std::to_string(worst / options.voxelSize));
-  EXPECT_LE(worst, options.voxelSize);
+  // Measured 0.056 voxels: the trilinear sample of exact distances across the surface's curve.
+  EXPECT_LE(worst, 0.07 * options.voxelSize);
 }
 
-TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
+TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinSevenHundredthsOfAPercent) {
   const auto world = makeBallsTopology({1.0f}, 4);
   ScratchDirectory out;
   VdbOptions options;
@@ -229,7 +244,8 @@ TEST(VdbSequenceWriter, InsideVolumeMatchesTheMeshWithinOnePercent) {
   const double expected = meshVolume(world, world->bodies[0]);
   RecordProperty("relative_volume_error",
                  std::to_string((voxels * dx * dx * dx - expected) / expected));
-  EXPECT_NEAR(voxels * dx * dx * dx, expected, 0.01 * expected);
+  // Measured 0.053% more than the mesh.
+  EXPECT_NEAR(voxels * dx * dx * dx, expected, 7e-4 * expected);
 }
 
 TEST(VdbSequenceWriter, VelocityAtTheSurfaceMatchesTheParticles) {
@@ -340,13 +356,25 @@ TEST(VdbSequenceWriter, OpenBodyGetsAnUnsignedDistanceField) {
 }
 
 TEST(VdbSequenceWriter, AutomaticVoxelSizeIsHalfTheMeanEdge) {
-  const auto world = makeBallsTopology({1.0f}, 2);
+  // A cube of side a, two triangles a face: each triangle has two sides of a and a diagonal of
+  // a·√2, so the mean edge is a·(2 + √2)/3, counted per triangle or per edge alike.
+  constexpr double kSide = 0.3;
+  SceneSetup setup;
+  BodySetup cube;
+  cube.name = "cube";
+  for (int corner = 0; corner < 8; ++corner)  // corner = x + 2y + 4z
+    cube.mesh.positions.emplace_back(float(kSide) * float(corner & 1),
+                                     float(kSide) * float((corner >> 1) & 1),
+                                     float(kSide) * float((corner >> 2) & 1));
+  cube.mesh.triangles = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                         {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+  setup.bodies.push_back(cube);
+  const SceneTopology world = buildSceneTopology(setup);
+  ASSERT_TRUE(world.bodies[0].closed);
   ScratchDirectory out;
-  VdbSequenceWriter writer(*world, out.path(), "auto", VdbOptions{});
-  EXPECT_DOUBLE_EQ(writer.voxelSize(), autoVoxelSize(*world));
-  // Level 2 of a unit icosphere: edges of about 0.3.
-  EXPECT_GT(writer.voxelSize(), 0.1);
-  EXPECT_LT(writer.voxelSize(), 0.2);
+  VdbSequenceWriter writer(world, out.path(), "auto", VdbOptions{});
+  const double expected = 0.5 * kSide * (2 + std::sqrt(2.0)) / 3;
+  EXPECT_NEAR(writer.voxelSize(), expected, 1e-7 * expected);
 }
 
 TEST(VdbSequenceWriter, BadSettingsFailBeforeAnyFileIsWritten) {

@@ -1,4 +1,4 @@
-// The broad phases on real meshes from ../shared/meshes, overlapping and deformed by a real
+// The broad phases on real meshes from tests/data/meshes, overlapping and deformed by a real
 // simulation: every kind and every sbhash level finds exactly brute force's pairs.
 #include <gtest/gtest.h>
 
@@ -6,6 +6,7 @@
 
 #include "core/collision/broad_phase.hpp"
 #include "core/simulator.hpp"
+#include "generated_meshes.hpp"
 #include "importers/mesh_import.hpp"
 #include "test_files.hpp"
 
@@ -13,9 +14,8 @@ namespace softbake {
 namespace {
 
 /// The file's meshes merged, scaled so the largest side is one metre and centred on `centre`.
-TriangleMesh unitMesh(const std::string& file, const Vec3f& centre) {
-  TriangleMesh mesh =
-      importMeshFile(test::sharedMeshes() / file, {.mergeMeshes = true}).meshes.at(0);
+TriangleMesh unitMesh(const std::filesystem::path& file, const Vec3f& centre) {
+  TriangleMesh mesh = importMeshFile(file, {.mergeMeshes = true}).meshes.at(0);
   Eigen::AlignedBox3f bounds;
   for (const Vec3f& p : mesh.positions) bounds.extend(p);
   const float scale = 1.0f / bounds.sizes().maxCoeff();
@@ -24,26 +24,27 @@ TriangleMesh unitMesh(const std::string& file, const Vec3f& centre) {
 }
 
 TEST(BroadPhaseOnRealMeshes, EveryKindAndLevelFindsBruteForcesPairsWhileTheyDeform) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
   SceneSetup scene;
+  test::ScratchDir dir;
+  const std::filesystem::path meshes = test::testMeshes();
   const struct {
-    const char* file;
+    std::filesystem::path file;
     Vec3f centre;
-  } bodies[] = {{"spot.obj", Vec3f(0, 1, 0)},
-                {"duck.dae", Vec3f(0.45f, 1.2f, 0.1f)},
-                {"fels.3ds", Vec3f(-0.4f, 1.1f, -0.2f)},
-                {"ballA.off", Vec3f(0.1f, 1.6f, 0.3f)},
-                {"sphereWithHole.stl", Vec3f(0.2f, 0.7f, -0.3f)}};  // open: self-collides
+  } bodies[] = {{dir.write("textured.obj", test::TexturedObj::text()), Vec3f(0, 1, 0)},
+                {meshes / "duck.dae", Vec3f(0.45f, 1.2f, 0.1f)},
+                {meshes / "fels.3ds", Vec3f(-0.4f, 1.1f, -0.2f)},
+                {meshes / "ballA.off", Vec3f(0.1f, 1.6f, 0.3f)},
+                {meshes / "sphereWithHole.stl", Vec3f(0.2f, 0.7f, -0.3f)}};  // open: self-collides
   for (const auto& body : bodies) {
     BodySetup setup;
-    setup.name = body.file;
+    setup.name = body.file.filename().string();
     setup.mesh = unitMesh(body.file, body.centre);
     setup.material = *findMaterialPreset("jelly");
     scene.bodies.push_back(std::move(setup));
   }
   StaticMeshCollider torus;
   torus.name = "torus";
-  torus.mesh = unitMesh("torus.STL", Vec3f(0, 0.4f, 0));
+  torus.mesh = unitMesh(meshes / "torus.STL", Vec3f(0, 0.4f, 0));
   scene.staticMeshes.push_back(std::move(torus));
   scene.settings.collisions.response = ResponseMode::None;  // let them sink into each other
   Simulator simulator(buildSceneTopology(scene));

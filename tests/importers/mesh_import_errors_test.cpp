@@ -46,8 +46,7 @@ TEST(MeshImportErrors, UnsupportedFormatIncludesAssimpsReason) {
 }
 
 TEST(MeshImportErrors, EmptyObjFromTheSharedBrokenFiles) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const auto file = test::sharedMeshes() / "broken" / "empty.obj";
+  const auto file = test::testMeshes() / "broken" / "empty.obj";
   EXPECT_EQ(importError(file), file.string() + ": cannot import (assimp: OBJ-file is too small.)");
 }
 

@@ -1,5 +1,5 @@
-// Every good shared mesh through importMeshFile, checked against the numbers in
-// shared/meshes/README.md after core's weld.
+// Every good test mesh through importMeshFile, checked after core's weld against the counts of
+// how each file was made (tests/data/meshes/README.md).
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -11,6 +11,7 @@
 
 #include "core/mesh/mesh_topology.hpp"
 #include "core/mesh/weld.hpp"
+#include "generated_meshes.hpp"
 #include "importers/mesh_import.hpp"
 #include "test_files.hpp"
 
@@ -19,18 +20,22 @@ namespace {
 
 struct SharedMesh {
   const char* file;
-  std::size_t particles;  ///< README "uniq pos", less unreferenced vertices (bunny only)
+  std::size_t particles;  ///< distinct positions that a triangle uses
   std::size_t triangles;
-  bool closed;  ///< README "Watertight"
+  bool closed;  ///< watertight after the weld
+  /// Writes a stand-in for the file, which then is not one of tests/data; null for the others.
+  std::string (*generate)() = nullptr;
 };
 
-// The welded particle count is the README's "uniq pos" for every file but the bunny: weld makes
-// particles only of vertices that a triangle uses, and 25 of the bunny's 8171 positions are used
-// by none (checked in BunnyParticlesAreItsReferencedPositions).
-constexpr SharedMesh kSharedMeshes[] = {
-    {"spot.obj", 2930, 5856, true},
+using test::ScanPly;
+using test::TexturedObj;
+
+// The counts of the copied files are the shared snapshot README's "uniq pos" and face counts.
+const SharedMesh kSharedMeshes[] = {
+    {"textured.obj", TexturedObj::kPositions, TexturedObj::kTriangles, true, &TexturedObj::text},
     {"ico4.obj", 642, 1280, true},
-    {"bunny.ply", 8171 - 25, 16301, false},
+    {"scan.ply", ScanPly::kFileVertices - ScanPly::kUnreferencedVertices, ScanPly::kTriangles,
+     false, &ScanPly::text},
     {"fuze.ply", 502, 1000, true},
     {"torus.STL", 4350, 8700, true},
     {"sphereWithHole.stl", 146, 285, false},
@@ -43,11 +48,13 @@ constexpr SharedMesh kSharedMeshes[] = {
 
 class SharedMeshTest : public ::testing::TestWithParam<SharedMesh> {};
 
-TEST_P(SharedMeshTest, WeldsToTheUniquePositionsOfTheReadme) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
+TEST_P(SharedMeshTest, WeldsToTheUniquePositionsOfTheFile) {
   const SharedMesh& expected = GetParam();
-  const ImportedMeshes imported =
-      importMeshFile(test::sharedMeshes() / expected.file, {.mergeMeshes = true});
+  test::ScratchDir dir;
+  const std::filesystem::path file = expected.generate
+                                         ? dir.write(expected.file, expected.generate())
+                                         : test::testMeshes() / expected.file;
+  const ImportedMeshes imported = importMeshFile(file, {.mergeMeshes = true});
   ASSERT_EQ(imported.meshes.size(), 1u);
   const TriangleMesh& mesh = imported.meshes[0];
   EXPECT_EQ(mesh.name, std::filesystem::path(expected.file).stem().string());
@@ -77,31 +84,32 @@ INSTANTIATE_TEST_SUITE_P(SharedMeshes, SharedMeshTest, ::testing::ValuesIn(kShar
                            return name;
                          });
 
-TEST(MeshImport, BunnyParticlesAreItsReferencedPositions) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const ImportedMeshes imported = importMeshFile(test::sharedMeshes() / "bunny.ply");
+TEST(MeshImport, ScanParticlesAreItsReferencedPositions) {
+  test::ScratchDir dir;
+  const ImportedMeshes imported = importMeshFile(dir.write("scan.ply", ScanPly::text()));
   ASSERT_EQ(imported.meshes.size(), 1u);
   const TriangleMesh& mesh = imported.meshes[0];
-  // The importer keeps all 8171 file vertices; the weld sets the 25 unused ones aside.
-  EXPECT_EQ(mesh.positions.size(), 8171u);
+  // The importer keeps every file vertex; the weld sets the unused ones aside.
+  EXPECT_EQ(mesh.positions.size(), ScanPly::kFileVertices);
   const WeldedMesh welded = weldByPosition(mesh.positions, mesh.triangles);
-  EXPECT_EQ(welded.unreferencedVertices, 25u);
-  EXPECT_EQ(welded.positions.size() + welded.unreferencedVertices, 8171u);
+  EXPECT_EQ(welded.unreferencedVertices, ScanPly::kUnreferencedVertices);
+  EXPECT_EQ(welded.positions.size() + welded.unreferencedVertices, ScanPly::kFileVertices);
 }
 
 TEST(MeshImport, KeepsUvsAndNormalsOfTheFile) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const TriangleMesh spot = importMeshFile(test::sharedMeshes() / "spot.obj").meshes.at(0);
-  EXPECT_EQ(spot.uvs.size(), spot.positions.size());
-  EXPECT_TRUE(spot.normals.empty());  // the file has none and nothing generates them
+  test::ScratchDir dir;
+  const TriangleMesh textured =
+      importMeshFile(dir.write("textured.obj", TexturedObj::text())).meshes.at(0);
+  EXPECT_EQ(textured.uvs.size(), textured.positions.size());
+  EXPECT_TRUE(textured.normals.empty());  // the file has none and nothing generates them
+  // The seam and the poles split positions by UV; the weld joins them again.
+  EXPECT_GT(textured.positions.size(), TexturedObj::kPositions);
   Eigen::AlignedBox2f uvBounds;
-  for (const Vec2f& uv : spot.uvs) uvBounds.extend(uv);
-  // The texture atlas fills most of the unit square; a few islands overhang it by up to 0.06.
-  EXPECT_GT(uvBounds.sizes().minCoeff(), 0.8f);
-  EXPECT_GT(uvBounds.min().minCoeff(), -0.1f);
-  EXPECT_LT(uvBounds.max().maxCoeff(), 1.1f);
+  for (const Vec2f& uv : textured.uvs) uvBounds.extend(uv);
+  EXPECT_TRUE(uvBounds.min().isApprox(Vec2f(0, 0))) << uvBounds.min().transpose();
+  EXPECT_TRUE(uvBounds.max().isApprox(Vec2f(1, 1))) << uvBounds.max().transpose();
 
-  const TriangleMesh ico = importMeshFile(test::sharedMeshes() / "ico4.obj").meshes.at(0);
+  const TriangleMesh ico = importMeshFile(test::testMeshes() / "ico4.obj").meshes.at(0);
   EXPECT_TRUE(ico.uvs.empty());
   ASSERT_EQ(ico.normals.size(), ico.positions.size());
   // Flat normals: each one is its triangle's outward face normal.
@@ -131,8 +139,7 @@ std::vector<double> instanceDeterminants(const std::filesystem::path& file) {
 }
 
 TEST(MeshImport, MirroredFbxInstancesComeOutWoundOutward) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const std::filesystem::path file = test::sharedMeshes() / "cubes_with_mirroring_and_pivot.fbx";
+  const std::filesystem::path file = test::testMeshes() / "cubes_with_mirroring_and_pivot.fbx";
   const std::vector<double> determinants = instanceDeterminants(file);
   ASSERT_EQ(determinants.size(), 4u);
   EXPECT_EQ(std::count_if(determinants.begin(), determinants.end(), [](double d) { return d < 0; }),
@@ -187,8 +194,7 @@ float localLargestSide(const std::filesystem::path& file) {
 }
 
 TEST(MeshImport, AppliesTheGltfNodeScaleOf100) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const std::filesystem::path file = test::sharedMeshes() / "AnimatedMorphSphere.gltf";
+  const std::filesystem::path file = test::testMeshes() / "AnimatedMorphSphere.gltf";
   const float local = localLargestSide(file);
   EXPECT_NEAR(local, 0.02f, 0.002f);  // "about 0.01 units across" in the README's words
   const float world = boundsOf(importMeshFile(file).meshes.at(0)).sizes().maxCoeff();
@@ -197,8 +203,7 @@ TEST(MeshImport, AppliesTheGltfNodeScaleOf100) {
 }
 
 TEST(MeshImport, AppliesTheColladaDuckNodeScaleOfOneHundredth) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const std::filesystem::path file = test::sharedMeshes() / "duck.dae";
+  const std::filesystem::path file = test::testMeshes() / "duck.dae";
   const TriangleMesh duck = importMeshFile(file).meshes.at(0);
   EXPECT_EQ(duck.name, "LOD3sp");  // the node, not the camera or the light
   const float world = boundsOf(duck).sizes().maxCoeff();
@@ -208,11 +213,12 @@ TEST(MeshImport, AppliesTheColladaDuckNodeScaleOfOneHundredth) {
 }
 
 TEST(MeshImport, NamesMeshesAfterNodesThenMeshesThenTheFile) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  EXPECT_EQ(importMeshFile(test::sharedMeshes() / "spot.obj").meshes.at(0).name, "defaultobject");
+  test::ScratchDir dir;
+  EXPECT_EQ(importMeshFile(dir.write("textured.obj", TexturedObj::text())).meshes.at(0).name,
+            "defaultobject");
   // "<OFFRoot>" is made up by assimp and the OFF mesh has no name: the file stem it is.
-  EXPECT_EQ(importMeshFile(test::sharedMeshes() / "ballA.off").meshes.at(0).name, "ballA");
-  EXPECT_EQ(importMeshFile(test::sharedMeshes() / "fels.3ds").meshes.at(0).name, "3DSMesh_0");
+  EXPECT_EQ(importMeshFile(test::testMeshes() / "ballA.off").meshes.at(0).name, "ballA");
+  EXPECT_EQ(importMeshFile(test::testMeshes() / "fels.3ds").meshes.at(0).name, "3DSMesh_0");
 }
 
 TEST(MeshImport, DropsPointsAndLinesWithANote) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "generated_meshes.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
 
@@ -36,22 +37,21 @@ void expectDroppedOnTheGround(const SceneFile& scene, const std::string& name) {
   }
 }
 
-TEST(MeshScene, ScalesTheSmallBunnyUpToAMetre) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const auto file = test::sharedMeshes() / "bunny.ply";
+TEST(MeshScene, ScalesTheSmallScanUpToAMetre) {
+  test::ScratchDir dir;
+  const auto file = dir.write("scan.ply", test::ScanPly::text());
   const SceneFile scene = sceneFromMeshFile(file);
-  expectDroppedOnTheGround(scene, "bunny");
+  expectDroppedOnTheGround(scene, "scan");
   ASSERT_EQ(scene.setup.bodies.size(), 1u);
-  EXPECT_EQ(scene.setup.bodies[0].name, "bunny");
+  EXPECT_EQ(scene.setup.bodies[0].name, "scan");
   EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1, 1e-5);
   ASSERT_EQ(scene.notes.size(), 1u);
   EXPECT_EQ(scene.notes[0],
-            file.string() + ": scaled by 6.43 to about a metre (its largest side was 0.156 units)");
+            file.string() + ": scaled by 6.25 to about a metre (its largest side was 0.16 units)");
 }
 
 TEST(MeshScene, ScalesTheLargeBallDownToAMetre) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const auto file = test::sharedMeshes() / "ballA.off";
+  const auto file = test::testMeshes() / "ballA.off";
   const SceneFile scene = sceneFromMeshFile(file);
   expectDroppedOnTheGround(scene, "ballA");
   EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1, 1e-5);
@@ -62,17 +62,16 @@ TEST(MeshScene, ScalesTheLargeBallDownToAMetre) {
 }
 
 TEST(MeshScene, LeavesMetreSizedMeshesAlone) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const SceneFile scene = sceneFromMeshFile(test::sharedMeshes() / "spot.obj");
-  expectDroppedOnTheGround(scene, "spot");
+  test::ScratchDir dir;
+  const SceneFile scene = sceneFromMeshFile(dir.write("textured.obj", test::TexturedObj::text()));
+  expectDroppedOnTheGround(scene, "textured");
   EXPECT_TRUE(scene.notes.empty());
-  EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), 1.71791f, 1e-4f);
+  EXPECT_NEAR(boundsOf(scene.setup).sizes().maxCoeff(), test::TexturedObj::kLargestSide, 1e-6);
 }
 
 TEST(MeshScene, OneBodyPerMeshOfAMultiMeshFile) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
   const SceneFile scene =
-      sceneFromMeshFile(test::sharedMeshes() / "cubes_with_mirroring_and_pivot.fbx");
+      sceneFromMeshFile(test::testMeshes() / "cubes_with_mirroring_and_pivot.fbx");
   const std::string stem = "cubes_with_mirroring_and_pivot";
   expectDroppedOnTheGround(scene, stem);
   std::vector<std::string> names;

@@ -1,5 +1,5 @@
-// The PLY header check. The crash file from shared/meshes/broken is only ever given to the guard
-// here: assimp 5.2 itself would take the test process down with it.
+// The PLY header check. The crash file from tests/data/meshes/broken is only ever given to the
+// guard here: assimp 5.2 itself would take the test process down with it.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "generated_meshes.hpp"
 #include "importers/ply_guard.hpp"
 #include "test_files.hpp"
 
@@ -29,9 +30,8 @@ std::string guardError(std::string_view bytes) {
 }
 
 TEST(PlyGuard, RejectsTheCrashFileWithoutAssimp) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
   const auto file =
-      test::sharedMeshes() / "broken" / "crash-30d6d0f7c529b3b66b4131700b7a4580cd7082df.ply";
+      test::testMeshes() / "broken" / "crash-30d6d0f7c529b3b66b4131700b7a4580cd7082df.ply";
   ASSERT_TRUE(isPlyFile(file));
   try {
     checkPlyFile(file);
@@ -44,18 +44,18 @@ TEST(PlyGuard, RejectsTheCrashFileWithoutAssimp) {
   }
 }
 
-TEST(PlyGuard, AcceptsTheSharedPlyFiles) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const PlyHeader bunny = checkPlyFile(test::sharedMeshes() / "bunny.ply");
-  EXPECT_EQ(bunny.format, PlyFormat::kAscii);
-  ASSERT_EQ(bunny.elements.size(), 2u);
-  EXPECT_EQ(bunny.elements[0].name, "vertex");
-  EXPECT_EQ(bunny.elements[0].count, 8171u);
-  EXPECT_EQ(bunny.elements[0].propertyCount, 5u);  // x y z confidence intensity
-  EXPECT_EQ(bunny.elements[1].count, 16301u);
-  EXPECT_FALSE(bunny.elements[1].fixedSize);
+TEST(PlyGuard, AcceptsTheTestPlyFiles) {
+  test::ScratchDir dir;
+  const PlyHeader scan = checkPlyFile(dir.write("scan.ply", test::ScanPly::text()));
+  EXPECT_EQ(scan.format, PlyFormat::kAscii);
+  ASSERT_EQ(scan.elements.size(), 2u);
+  EXPECT_EQ(scan.elements[0].name, "vertex");
+  EXPECT_EQ(scan.elements[0].count, test::ScanPly::kFileVertices);
+  EXPECT_EQ(scan.elements[0].propertyCount, 5u);  // x y z confidence intensity
+  EXPECT_EQ(scan.elements[1].count, test::ScanPly::kTriangles);
+  EXPECT_FALSE(scan.elements[1].fixedSize);
 
-  const auto fuzeFile = test::sharedMeshes() / "fuze.ply";
+  const auto fuzeFile = test::testMeshes() / "fuze.ply";
   const PlyHeader fuze = checkPlyFile(fuzeFile);
   EXPECT_EQ(fuze.format, PlyFormat::kBinaryLittleEndian);
   ASSERT_EQ(fuze.elements.size(), 2u);

@@ -252,18 +252,17 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
 }
 
 TEST(SceneFile, MeshPathsAreRelativeToTheSceneFile) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
   test::ScratchDir dir;
   std::filesystem::create_directories(dir / "scenes" / "meshes");
-  std::filesystem::copy_file(test::sharedMeshes() / "ico4.obj",
+  std::filesystem::copy_file(test::testMeshes() / "ico4.obj",
                              dir / "scenes" / "meshes" / "ico4.obj");
-  std::filesystem::copy_file(test::sharedMeshes() / "ico4.mtl",
+  std::filesystem::copy_file(test::testMeshes() / "ico4.mtl",
                              dir / "scenes" / "meshes" / "ico4.mtl");
   const auto sceneFile =
       dir.write("scenes/ball.json", R"({
     "bodies": [{"name": "ball", "mesh": "meshes/ico4.obj", "transform": {"translate": [0, 3, 0]}}],
     "colliders": [{"type": "mesh", "name": "rock", "mesh": ")" +
-                                        (test::sharedMeshes() / "fels.3ds").string() + R"("}]
+                                        (test::testMeshes() / "fels.3ds").string() + R"("}]
   })");
   const SceneFile scene = loadSceneFile(sceneFile);
   EXPECT_EQ(scene.setup.name, "ball");
@@ -273,7 +272,7 @@ TEST(SceneFile, MeshPathsAreRelativeToTheSceneFile) {
   EXPECT_EQ(weldByPosition(ball.mesh.positions, ball.mesh.triangles).positions.size(), 642u);
   Eigen::AlignedBox3f bounds, original;
   for (const Vec3f& p : ball.mesh.positions) bounds.extend(p);
-  const ImportedMeshes source = importMeshFile(test::sharedMeshes() / "ico4.obj");
+  const ImportedMeshes source = importMeshFile(test::testMeshes() / "ico4.obj");
   for (const Vec3f& p : source.meshes.at(0).positions) original.extend(p);
   EXPECT_TRUE(bounds.center().isApprox(original.center() + Vec3f(0, 3, 0), 1e-5f));
   ASSERT_EQ(scene.setup.staticMeshes.size(), 1u);  // an absolute path works as well
@@ -289,8 +288,7 @@ TEST(SceneFile, MeshPathsAreRelativeToTheSceneFile) {
 }
 
 TEST(SceneFile, ImportErrorsComeWithTheKeyPath) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
-  const std::filesystem::path broken = test::sharedMeshes() / "broken";
+  const std::filesystem::path broken = test::testMeshes() / "broken";
   EXPECT_EQ(sceneError(R"({"bodies": [{"mesh": "empty.obj"}]})", broken),
             "scene.json: bodies[0].mesh: " + (broken / "empty.obj").lexically_normal().string() +
                 ": cannot import (assimp: OBJ-file is too small.)");
@@ -316,11 +314,10 @@ TEST(SceneFile, NegativeScaleKeepsBodiesWoundOutward) {
 }
 
 TEST(SceneFile, MultiMeshFilesGiveOneBodyPerMeshUnlessMerged) {
-  SOFTBAKE_REQUIRE_SHARED_MESHES();
   const std::string fbx = "cubes_with_mirroring_and_pivot.fbx";
   const SceneFile split = parse(R"({"bodies": [{"name": "cubes", "mesh": ")" + fbx +
                                     R"(", "mass": 2, "material": "jelly"}]})",
-                                test::sharedMeshes());
+                                test::testMeshes());
   std::vector<std::string> names;
   for (const BodySetup& body : split.setup.bodies) {
     names.push_back(body.name);
@@ -333,13 +330,13 @@ TEST(SceneFile, MultiMeshFilesGiveOneBodyPerMeshUnlessMerged) {
 
   const SceneFile merged =
       parse(R"({"bodies": [{"name": "cubes", "mesh": ")" + fbx + R"(", "merge_meshes": true}]})",
-            test::sharedMeshes());
+            test::testMeshes());
   ASSERT_EQ(merged.setup.bodies.size(), 1u);
   EXPECT_EQ(merged.setup.bodies[0].name, "cubes");
   EXPECT_EQ(merged.setup.bodies[0].mesh.triangles.size(), 420u);
 
   EXPECT_EQ(sceneError(R"({"bodies": [{"mesh": ")" + fbx + R"(", "pins": {"indices": [0]}}]})",
-                       test::sharedMeshes()),
+                       test::testMeshes()),
             "scene.json: bodies[0].pins.indices: particle indices need a single mesh, but the file "
             "gives 4; set merge_meshes to true or pin with boxes");
 }

@@ -11,19 +11,14 @@
 
 namespace softbake::test {
 
-inline std::filesystem::path sharedMeshes() {
-  return SOFTBAKE_SHARED_MESHES_DIR;
+/// The meshes the suite imports, kept in the repository (tests/data/meshes/README.md says where
+/// each comes from). A missing file makes its test fail, never skip.
+inline std::filesystem::path testMeshes() {
+  return SOFTBAKE_TEST_MESHES_DIR;
 }
 inline std::filesystem::path sourceDir() {
   return SOFTBAKE_SOURCE_DIR;
 }
-
-/// The shared meshes live outside the repository; a checkout without them skips, not fails.
-#define SOFTBAKE_REQUIRE_SHARED_MESHES()                                                 \
-  do {                                                                                   \
-    if (!std::filesystem::is_directory(::softbake::test::sharedMeshes()))                \
-      GTEST_SKIP() << "shared meshes not found at " << ::softbake::test::sharedMeshes(); \
-  } while (false)
 
 /// A fresh folder for one test, removed with everything in it when the test ends.
 class ScratchDir {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -83,14 +84,53 @@ TEST(AtomicFile, WriteFailingMidwayLeavesNoFile) {
 }
 
 TEST(AtomicFile, ReadOnlyDirectoryIsAClearError) {
-  if (::geteuid() == 0) GTEST_SKIP() << "root writes into read-only directories";
+  namespace fs = std::filesystem;
   ScratchDirectory dir;
-  const auto readOnly = dir.path() / "locked";
-  std::filesystem::create_directory(readOnly);
-  std::filesystem::permissions(
-      readOnly, std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
-  EXPECT_THROW(writeFileAtomically(readOnly / "frame.obj", "data"), Error);
-  std::filesystem::permissions(readOnly, std::filesystem::perms::owner_all);
+  const auto readOnly = dir.path() / "locked", writable = dir.path() / "open";
+  fs::create_directory(readOnly);
+  fs::create_directory(writable);
+  fs::permissions(dir.path(), fs::perms::owner_all | fs::perms::others_exec);
+  fs::permissions(writable, fs::perms::all);
+  fs::permissions(readOnly, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::others_read |
+                                fs::perms::others_exec);
+  // Root writes into read-only folders, so the writes run in a child that, when root, becomes
+  // nobody first. It writes into the open folder too: the locked one must fail for its
+  // permissions, not because the child can reach nothing. The child sends back what happened.
+  int pipeEnds[2];
+  ASSERT_EQ(::pipe(pipeEnds), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::close(pipeEnds[0]);
+    std::string message = "(no error)";
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) {
+      message = "(could not become nobody)";
+    } else {
+      try {
+        writeFileAtomically(writable / "frame.obj", "data");
+        writeFileAtomically(readOnly / "frame.obj", "data");
+      } catch (const Error& e) {
+        message = e.what();
+      }
+    }
+    const ssize_t written = ::write(pipeEnds[1], message.data(), message.size());
+    ::_exit(written == ssize_t(message.size()) ? 0 : 1);
+  }
+  ::close(pipeEnds[1]);
+  std::string message;
+  char buffer[512];
+  for (ssize_t n; (n = ::read(pipeEnds[0], buffer, sizeof buffer)) > 0;)
+    message.append(buffer, std::size_t(n));
+  ::close(pipeEnds[0]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << message;
+
+  EXPECT_EQ(readFile(writable / "frame.obj"), "data");
+  EXPECT_NE(message.find("'" + (readOnly / "frame.obj").string() + "'"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("Permission denied"), std::string::npos) << message;
+  fs::permissions(readOnly, fs::perms::owner_all);
   EXPECT_TRUE(listDirectory(readOnly).empty());
 }
 

@@ -1,0 +1,183 @@
+// `softbake bench`'s figures checked against each other and against what was asked for: the
+// machine-readable line, the per-step CSV and --warmup. No figure is compared with a time this
+// machine should reach; only their consistency is.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "softbake_process.hpp"
+
+namespace softbake {
+namespace {
+
+namespace fs = std::filesystem;
+using test::CliTest;
+using test::quoted;
+using test::readFile;
+using test::Result;
+using test::runSoftbake;
+
+/// The machine-readable lines, `key=value` words, one map per broad phase.
+std::vector<std::map<std::string, std::string>> summaryLines(const std::string& output) {
+  std::vector<std::map<std::string, std::string>> lines;
+  std::istringstream text(output);
+  for (std::string line; std::getline(text, line);) {
+    if (line.rfind("scene=", 0) != 0) continue;
+    std::map<std::string, std::string> fields;
+    std::istringstream words(line);
+    for (std::string word; words >> word;) {
+      const std::size_t equals = word.find('=');
+      if (equals != std::string::npos) fields[word.substr(0, equals)] = word.substr(equals + 1);
+    }
+    lines.push_back(fields);
+  }
+  return lines;
+}
+
+double number(const std::map<std::string, std::string>& fields, const std::string& key) {
+  const auto found = fields.find(key);
+  if (found == fields.end()) {
+    ADD_FAILURE() << "no " << key;
+    return NAN;
+  }
+  return std::stod(found->second);
+}
+
+struct CsvRow {
+  std::string broadPhase;
+  long step = 0, frame = 0;
+  std::vector<double> stagesMs;  ///< forces … failsafe
+  double stepMs = 0;
+  long pairs = 0, contacts = 0;
+};
+
+constexpr const char* kCsvHeader =
+    "broadphase,step,frame,forces_ms,integration_ms,boxes_ms,broad_phase_ms,narrow_phase_ms,"
+    "response_ms,planes_ms,failsafe_ms,step_ms,pairs,contacts";
+
+std::vector<CsvRow> readCsv(const fs::path& path) {
+  std::istringstream text(readFile(path));
+  std::string line;
+  std::getline(text, line);
+  EXPECT_EQ(line, kCsvHeader);
+  std::vector<CsvRow> rows;
+  while (std::getline(text, line)) {
+    std::vector<std::string> cells;
+    std::istringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    EXPECT_EQ(cells.size(), 14u) << line;
+    if (cells.size() != 14) continue;
+    CsvRow parsed;
+    parsed.broadPhase = cells[0];
+    parsed.step = std::stol(cells[1]);
+    parsed.frame = std::stol(cells[2]);
+    for (int stage = 0; stage < 8; ++stage) parsed.stagesMs.push_back(std::stod(cells[3 + stage]));
+    parsed.stepMs = std::stod(cells[11]);
+    parsed.pairs = std::stol(cells[12]);
+    parsed.contacts = std::stol(cells[13]);
+    rows.push_back(parsed);
+  }
+  return rows;
+}
+
+/// The value at nearest rank floor(fraction · n), as bench computes its median and p95.
+double rank(std::vector<double> values, double fraction) {
+  std::sort(values.begin(), values.end());
+  return values[std::min(values.size() - 1, std::size_t(fraction * double(values.size())))];
+}
+
+class BenchFigures : public CliTest {};
+
+TEST_F(BenchFigures, TheSummaryLineAndTheCsvAgree) {
+  // 4 frames after the first, 4 substeps each: 16 steps per broad phase.
+  constexpr int kFrames = 5, kSubsteps = 4, kSteps = (kFrames - 1) * kSubsteps;
+  const fs::path csv = folder_ / "steps.csv";
+  const Result run =
+      runSoftbake("bench default --frames " + std::to_string(kFrames) + " --substeps " +
+                  std::to_string(kSubsteps) + " --broadphase sbhash,bvh -j 1 --csv " + quoted(csv));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const auto lines = summaryLines(run.output);
+  ASSERT_EQ(lines.size(), 2u) << run.output;
+  const std::vector<CsvRow> rows = readCsv(csv);
+  ASSERT_EQ(rows.size(), std::size_t(2 * kSteps));
+
+  const char* broadPhases[] = {"sbhash", "bvh"};
+  for (int b = 0; b < 2; ++b) {
+    const auto& line = lines[std::size_t(b)];
+    SCOPED_TRACE(broadPhases[b]);
+    EXPECT_EQ(line.at("scene"), "default");
+    EXPECT_EQ(line.at("broadphase"), broadPhases[b]);
+    EXPECT_EQ(number(line, "faces"), 2 * 1280);  // two level-3 icospheres
+    EXPECT_EQ(number(line, "threads"), 1);
+    EXPECT_EQ(number(line, "warmup"), 0);
+    EXPECT_EQ(number(line, "steps"), kSteps);
+    // Both rates come from the same simulated seconds: frames/s is steps/s over the substeps per
+    // frame, up to the rounding of the printed figures (0.05 and 0.005).
+    const double stepsPerSecond = number(line, "steps_per_s");
+    const double framesPerSecond = number(line, "frames_per_s");
+    EXPECT_GT(stepsPerSecond, 0);
+    EXPECT_GT(framesPerSecond, 0);
+    EXPECT_NEAR(framesPerSecond * kSubsteps, stepsPerSecond, 0.05 + kSubsteps * 0.005);
+
+    std::vector<double> stepMs;
+    double contacts = 0;
+    for (int s = 0; s < kSteps; ++s) {
+      const CsvRow& row = rows[std::size_t(b * kSteps + s)];
+      EXPECT_EQ(row.broadPhase, broadPhases[b]);
+      EXPECT_EQ(row.step, s + 1);
+      EXPECT_EQ(row.frame, 2 + s / kSubsteps);
+      // The step is its stages, each printed to 6 significant digits.
+      double stages = 0;
+      for (double ms : row.stagesMs) {
+        EXPECT_GE(ms, 0);
+        stages += ms;
+      }
+      EXPECT_GT(row.stepMs, 0);
+      EXPECT_NEAR(stages, row.stepMs, 1e-5 * row.stepMs + 1e-9) << "step " << s + 1;
+      // Every broad phase finds the same pairs, so the simulations and their counts agree.
+      const CsvRow& sbhash = rows[std::size_t(s)];
+      EXPECT_EQ(row.pairs, sbhash.pairs);
+      EXPECT_EQ(row.contacts, sbhash.contacts);
+      stepMs.push_back(row.stepMs);
+      contacts += double(row.contacts);
+    }
+    // The line's spread is the CSV's, printed to 4 decimals.
+    EXPECT_NEAR(number(line, "median_step_ms"), rank(stepMs, 0.5), 6e-5 + 1e-5 * rank(stepMs, 0.5));
+    EXPECT_NEAR(number(line, "p95_step_ms"), rank(stepMs, 0.95), 6e-5 + 1e-5 * rank(stepMs, 0.95));
+    EXPECT_NEAR(number(line, "contacts_per_step"), contacts / kSteps, 0.05);
+    EXPECT_GT(number(line, "peak_rss_mb"), 0);
+  }
+}
+
+TEST_F(BenchFigures, WarmupStepsRunFirstAndAreNotMeasured) {
+  // The built-in scene's balls are apart for their first quarter second and in contact from about
+  // 0.2 s to 0.45 s: the 8 measured steps (1/12 s) see contacts only after a warm-up has brought
+  // the balls together.
+  const auto contactsAfter = [&](int warmup) -> double {
+    const Result run =
+        runSoftbake("bench default --frames 3 --substeps 4 --warmup " + std::to_string(warmup));
+    EXPECT_EQ(run.exitCode, 0) << run.output;
+    const auto lines = summaryLines(run.output);
+    EXPECT_EQ(lines.size(), 1u) << run.output;
+    if (lines.size() != 1) return NAN;
+    EXPECT_EQ(number(lines[0], "warmup"), warmup);
+    EXPECT_EQ(number(lines[0], "steps"), 8) << "warm-up steps are not counted";
+    if (warmup > 0) {
+      EXPECT_NE(run.output.find("after " + std::to_string(warmup) + " warm-up steps"),
+                std::string::npos)
+          << run.output;
+    }
+    return number(lines[0], "contacts_per_step");
+  };
+  EXPECT_EQ(contactsAfter(0), 0);
+  EXPECT_GT(contactsAfter(32), 0);  // 1/3 s: the balls press into each other
+}
+
+}  // namespace
+}  // namespace softbake

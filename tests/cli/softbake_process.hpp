@@ -1,0 +1,78 @@
+#pragma once
+/// Runs the real `softbake` binary in a child process, as a user or a pipeline would, for the CLI
+/// tests: its exit code and everything it printed.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace softbake::test {
+
+struct Result {
+  int exitCode = -1;  // -1: killed by a signal
+  std::string output;
+};
+
+/// `text` as one shell word.
+inline std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+inline std::string quoted(const std::filesystem::path& path) {
+  return quoted(path.string());
+}
+
+/// `softbake ARGUMENTS`, stdout and stderr together.
+inline Result runSoftbake(const std::string& arguments) {
+  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
+  Result result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+    result.output.append(buffer, read);
+  const int status = pclose(pipe);
+  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+inline std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+/// A fresh folder per test under the system temp folder, removed afterwards.
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // The process id keeps runs of the suite from other checkouts out of each other's way.
+    std::string name = std::string("softbake_cli_") + info->test_suite_name() + "_" + info->name() +
+                       "_" + std::to_string(::getpid());
+    for (char& c : name)
+      if (c == '/') c = '_';  // parameterised tests
+    folder_ = std::filesystem::temp_directory_path() / name;
+    std::filesystem::remove_all(folder_);
+    std::filesystem::create_directories(folder_);
+  }
+  void TearDown() override { std::filesystem::remove_all(folder_); }
+
+  std::filesystem::path writeScene(const std::string& name, const std::string& text) {
+    const std::filesystem::path path = folder_ / name;
+    std::ofstream(path) << text;
+    return path;
+  }
+
+  std::filesystem::path folder_;
+};
+
+}  // namespace softbake::test
