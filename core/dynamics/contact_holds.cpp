@@ -24,14 +24,12 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
 
 std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
   std::size_t caught = 0;
+  const Scalar skin = topology_.settings.skin;
   for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
     if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
     for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
       const PlaneCollider& plane = topology_.planes[p];
-      // Behind the plane only: one that ends within the skin moves less than the skin when the
-      // plane pass lifts it, which stores next to nothing, and taking the step again for it would
-      // double the cost of every step that brings a particle near the ground.
-      if (plane.normal.dot(state.position[i] - plane.point) >= 0) continue;
+      if (plane.normal.dot(state.position[i] - plane.point) >= skin) continue;
       touchedPlane_[i] = std::int32_t(p);
       ++caught;
       break;

@@ -36,8 +36,8 @@ class ContactHolds {
   /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`.
   void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt);
 
-  /// After an implicit step, before its plane pass: marks every particle the step left behind a
-  /// plane that no hold held. Returns how many: when any, the caller takes the step
+  /// After an implicit step, before its plane pass: marks every particle the step left on or
+  /// behind a plane that no hold held. Returns how many: when any, the caller takes the step
   /// again from its start with those held too (holdFor), so that a particle meeting the ground is
   /// stopped within the solve, which moves its neighbours with it, instead of being projected
   /// back after it (a vertical sheet landing on its edge gained 0.5 J that way).
