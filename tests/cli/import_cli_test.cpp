@@ -9,34 +9,15 @@
 #include <fstream>
 #include <string>
 
+#include "softbake_process.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int exitCode = -1;  // -1: killed by a signal
-  std::string output;
-};
-
-std::string quoted(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-Result runSoftbake(const std::string& arguments) {
-  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using softbake::test::quoted;
+using softbake::test::Result;
+using softbake::test::runSoftbake;
 
 fs::path importData(const std::string& name) {
   return fs::path(SOFTBAKE_SOURCE_DIR) / "tests" / "data" / "import" / name;

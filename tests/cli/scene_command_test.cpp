@@ -9,31 +9,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "softbake_process.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int exitCode = -1;  // -1: killed by a signal
-  std::string output;
-};
-
-/// Runs softbake with `arguments`; `stderrToo` merges stderr into the output, otherwise it is
-/// dropped so the output is exactly what a pipe would read.
-Result runSoftbake(const std::string& arguments, bool stderrToo) {
-  const std::string command =
-      std::string(SOFTBAKE_BINARY) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using softbake::test::Result;
+using softbake::test::runSoftbake;
 
 /// A fresh folder per test under the system temp folder, removed afterwards.
 class SceneCommandTest : public ::testing::Test {

@@ -30,9 +30,11 @@ inline std::string quoted(const std::filesystem::path& path) {
   return quoted(path.string());
 }
 
-/// `softbake ARGUMENTS`, stdout and stderr together.
-inline Result runSoftbake(const std::string& arguments) {
-  const std::string command = std::string(SOFTBAKE_BINARY) + " " + arguments + " 2>&1";
+/// `softbake ARGUMENTS`, stdout and stderr together; with `stderrToo` false stderr is dropped,
+/// so the output is exactly what a pipe would read.
+inline Result runSoftbake(const std::string& arguments, bool stderrToo = true) {
+  const std::string command =
+      std::string(SOFTBAKE_BINARY) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");
   Result result;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return result;

@@ -30,15 +30,7 @@ std::filesystem::path importData(std::string_view name) {
   return test::sourceDir() / "tests" / "data" / "import" / name;
 }
 
-std::string importError(const std::filesystem::path& file, const MeshImportOptions& options = {}) {
-  try {
-    importMeshFile(file, options);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return {};
-}
+using test::importError;
 
 // A PLY of `vertices` points on a line, the first `faces` triangles of them used.
 std::string plyWithUnusedVertices(int vertices, int faces) {

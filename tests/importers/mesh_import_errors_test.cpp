@@ -16,15 +16,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
-std::string importError(const std::filesystem::path& file, const MeshImportOptions& options = {}) {
-  try {
-    importMeshFile(file, options);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return {};
-}
+using test::importError;
 
 TEST(MeshImportErrors, MissingFile) {
   test::ScratchDir dir;

@@ -55,15 +55,7 @@ std::vector<std::uint64_t> rowsOf(const std::string& file) {
   return countPlyRows(header, std::string_view(file).substr(header.dataOffset), "t.ply");
 }
 
-std::string importError(const std::filesystem::path& file, const MeshImportOptions& options = {}) {
-  try {
-    importMeshFile(file, options);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return {};
-}
+using test::importError;
 
 TEST(PlyData, CountsTheWholeRowsOfEachElement) {
   static_assert(std::endian::native == std::endian::little, "binaryCube writes native order");

@@ -130,15 +130,7 @@ double signedVolume(const TriangleMesh& mesh) {
   return volume;
 }
 
-std::string importError(const std::filesystem::path& file, const MeshImportOptions& options = {}) {
-  try {
-    importMeshFile(file, options);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return {};
-}
+using test::importError;
 
 TEST(PlyStrips, AlternateTheWindingAndSkipTheDegenerateJoins) {
   std::vector<Triangle> triangles;

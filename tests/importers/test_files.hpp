@@ -9,7 +9,22 @@
 #include <string>
 #include <string_view>
 
+#include "core/error.hpp"
+#include "importers/mesh_import.hpp"
+
 namespace softbake::test {
+
+/// The message importing `file` fails with; a test failure when it does not fail.
+inline std::string importError(const std::filesystem::path& file,
+                               const MeshImportOptions& options = {}) {
+  try {
+    importMeshFile(file, options);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "no error for " << file;
+  return {};
+}
 
 /// The meshes the suite imports, kept in the repository (tests/data/meshes/README.md says where
 /// each comes from). A missing file makes its test fail, never skip.
