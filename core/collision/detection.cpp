@@ -15,10 +15,6 @@ constexpr std::size_t kPairGrain = 256;
 /// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
 constexpr std::size_t kParticleChunks = 128;
 
-bool hasVertex(const Triangle& t, Index v) {
-  return t[0] == v || t[1] == v || t[2] == v;
-}
-
 /// The struck triangle of a particle test, computed once for all the particles tested against it.
 /// The triangle moved too during the substep: a particle's start is shifted by the triangle's own
 /// displacement (of its centroid), so the test sees the motion relative to the triangle. Without

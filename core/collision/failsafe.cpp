@@ -28,10 +28,6 @@ PointPath path(const CollisionGeometry& geometry, std::span<const Vec3> start,
   return {geometry.vertex(start, v).cast<double>(), geometry.vertex(end, v).cast<double>()};
 }
 
-bool shares(const Triangle& t, Index v) {
-  return t[0] == v || t[1] == v || t[2] == v;
-}
-
 bool lessImpact(const FailsafeImpact& a, const FailsafeImpact& b) {
   return a.edge != b.edge ? a.edge < b.edge : a.vertex < b.vertex;
 }
@@ -202,7 +198,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
         const Triangle& f = geometry.triangleVertices[face];
         for (int k = 0; k < 3; ++k) {
           const Index p = geometry.triangleVertices[from][k];
-          if ((!everyPrimitive && !(owns_[from] & (1u << k))) || shares(f, p)) continue;
+          if ((!everyPrimitive && !(owns_[from] & (1u << k))) || hasVertex(f, p)) continue;
           if (p >= particles && f[0] >= particles) continue;  // static against static
           if (!pathBox(p).intersects(boxes_[face])) continue;
           const std::optional<Impact> impact = vertexFaceImpact(
@@ -273,7 +269,7 @@ bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
   const auto intersect = [&](Index t, Index u) {
     const Triangle& a = geometry.triangleVertices[t];
     for (Index v : geometry.triangleVertices[u])
-      if (shares(a, v)) return false;
+      if (hasVertex(a, v)) return false;
     return intersectTrianglePair(geometry.corners(start, t), geometry.corners(start, u), hits);
   };
   if (!impact.edge) {
@@ -282,9 +278,9 @@ bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
     return false;
   }
   for (Index t : around(impact.vertex[0])) {
-    if (!shares(geometry.triangleVertices[t], impact.vertex[1])) continue;
+    if (!hasVertex(geometry.triangleVertices[t], impact.vertex[1])) continue;
     for (Index u : around(impact.vertex[2]))
-      if (shares(geometry.triangleVertices[u], impact.vertex[3]) && intersect(t, u)) return true;
+      if (hasVertex(geometry.triangleVertices[u], impact.vertex[3]) && intersect(t, u)) return true;
   }
   return false;
 }

@@ -45,6 +45,11 @@ struct CollisionGeometry {
   }
 };
 
+/// Whether `v` is one of the corners of `t`.
+inline bool hasVertex(const Triangle& t, Index v) {
+  return t[0] == v || t[1] == v || t[2] == v;
+}
+
 /// Removes from `pairs` the triangle pairs between the surfaces of `surfacePairs` (sorted, lower
 /// surface first; a surface with itself for pairs within one).
 void dropSurfacePairs(const CollisionGeometry& geometry,

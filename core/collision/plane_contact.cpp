@@ -14,16 +14,16 @@ constexpr std::size_t kParticleGrain = 2048;
 /// Returns true when the particle touches the plane (and, with `move`, was moved).
 bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x, Vec3& v,
                     bool move) {
-  const Scalar endDistance = plane.normal.dot(x - plane.point);
-  if (endDistance >= skin) return false;
+  if (!touchesPlane(plane, skin, x)) return false;
+  const Scalar endDistance = heightAbove(plane, x);
   if (!move) return endDistance < 0;
-  const Scalar startDistance = plane.normal.dot(start - plane.point);
+  const Scalar startDistance = heightAbove(plane, start);
   if (startDistance > 0 && endDistance < 0) {
     // Crossed during the step: the intersection point of the segment, as the paper does.
     const Scalar t = startDistance / (startDistance - endDistance);
     x = start + t * (x - start);
   }
-  x += (skin - plane.normal.dot(x - plane.point)) * plane.normal;
+  x += (skin - heightAbove(plane, x)) * plane.normal;
   const Scalar normalSpeed = plane.normal.dot(v);
   if (normalSpeed < 0) {
     const Vec3 tangential = v - normalSpeed * plane.normal;

@@ -23,4 +23,15 @@ std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const 
 
 inline constexpr std::int32_t kNoPlane = -1;
 
+/// How far `x` lies above `plane`, along its normal (negative behind it).
+inline Scalar heightAbove(const PlaneCollider& plane, const Vec3& x) {
+  return plane.normal.dot(x - plane.point);
+}
+
+/// Whether a particle at `x` is in contact with `plane`: closer than the skin, or behind it. The
+/// one rule for the plane pass and for the implicit step's holds (core/dynamics/contact_holds).
+inline bool touchesPlane(const PlaneCollider& plane, Scalar skin, const Vec3& x) {
+  return heightAbove(plane, x) < skin;
+}
+
 }  // namespace softbake

@@ -17,7 +17,7 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
     heldPlane_[i] = touchedPlane_[i];
     const PlaneCollider& plane = topology_.planes[touchedPlane_[i]];
     // The normal speed that ends the step at the skin, where the plane pass left it.
-    const Scalar distance = plane.normal.dot(state.position[i] - plane.point);
+    const Scalar distance = heightAbove(plane, state.position[i]);
     solver.hold(i, plane.normal, (skin - distance) / dt, plane.friction);
   }
 }
@@ -29,7 +29,7 @@ std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
     if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
     for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
       const PlaneCollider& plane = topology_.planes[p];
-      if (plane.normal.dot(state.position[i] - plane.point) >= skin) continue;
+      if (!touchesPlane(plane, skin, state.position[i])) continue;
       touchedPlane_[i] = std::int32_t(p);
       ++caught;
       break;
