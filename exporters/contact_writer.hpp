@@ -25,6 +25,8 @@ class ContactWriter : public FrameSink {
   /// Copies what it needs from `topology`. Creates OUT/contacts. Throws softbake::Error.
   ContactWriter(const SceneTopology& topology, const std::filesystem::path& outputDirectory,
                 std::string scene, int framePadding = 4);
+  /// Throws softbake::Error naming the file for a time, contact position or normal that is not
+  /// finite (and writes nothing), or when writing fails.
   void write(const Frame& frame) override;
   const char* name() const override { return "contacts"; }
   std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "output/finite_values.hpp"
 #include "output/version.hpp"
 
 namespace softbake {
@@ -191,7 +192,14 @@ ObjSequenceWriter::ObjSequenceWriter(std::shared_ptr<const SceneTopology> topolo
   if (framePadding < 1 || framePadding > 9)
     throw Error(cat("frame padding must be 1 to 9 digits, not ", framePadding));
   const std::vector<Body>& bodies = topology_->bodies;
-  for (const Body& body : bodies) checkRenderMesh(body);
+  // Every frame repeats the UVs, so a bad one is refused before any frame: name them all.
+  const std::filesystem::path frames = outputDirectory / naming().pattern();
+  for (const Body& body : bodies) {
+    checkRenderMesh(body);
+    for (std::size_t v = 0; v < body.render.uvs.size(); ++v)
+      requireFinite(frames, body.render.uvs[v],
+                    [&] { return cat("body '", body.name, "': the UV of render vertex ", v); });
+  }
 
   const std::vector<std::string> names = objectNames(bodies);
   std::uint64_t firstTexcoord = 1;
@@ -228,6 +236,8 @@ void ObjSequenceWriter::write(const Frame& frame) {
   if (frame.positions.size() != particleCount_)
     throw Error(cat("frame ", frame.number, ": ", frame.positions.size(),
                     " particle positions for a scene of ", particleCount_));
+  const std::filesystem::path path = framePath(frame.number);
+  requireFinite(path, frame.time, [&] { return cat("frame ", frame.number, ": the time"); });
   buffer_.clear();
   pieces_.clear();
   char line[kMaxLine];
@@ -243,7 +253,8 @@ void ObjSequenceWriter::write(const Frame& frame) {
   buffer_ += ".mtl\n";
   addFormattedSince(0);
 
-  for (std::size_t b = 0; b < text_.size(); ++b) formatBody(frame, topology_->bodies[b], text_[b]);
+  for (std::size_t b = 0; b < text_.size(); ++b)
+    formatBody(frame, topology_->bodies[b], text_[b], path);
 
   parts_.clear();
   std::uint64_t bytes = 0;
@@ -253,20 +264,20 @@ void ObjSequenceWriter::write(const Frame& frame) {
                          : std::string_view(buffer_).substr(piece.begin, piece.end - piece.begin));
     bytes += parts_.back().size();
   }
-  writeFileAtomically(framePath(frame.number), parts_);
+  writeFileAtomically(path, parts_);
   bytes_.fetch_add(bytes, std::memory_order_relaxed);
 }
 
-void ObjSequenceWriter::formatBody(const Frame& frame, const Body& body, const BodyText& text) {
+void ObjSequenceWriter::formatBody(const Frame& frame, const Body& body, const BodyText& text,
+                                   const std::filesystem::path& path) {
   addFixed(text.object);
   std::size_t begin = buffer_.size();
   const Vec3* const positions = frame.positions.data() + body.firstParticle;
   for (Index i = 0; i < body.particleCount; ++i) {
     const Vec3& v = positions[i];
-    // A NaN in a file poisons every tool downstream; refuse the frame instead.
-    if (!v.allFinite())
-      throw Error(cat("frame ", frame.number, ": body '", body.name, "': particle ", i,
-                      " has a non-finite position (", v.x(), ", ", v.y(), ", ", v.z(), ")"));
+    requireFinite(path, v, [&] {
+      return cat("frame ", frame.number, ": body '", body.name, "': the position of particle ", i);
+    });
     appendVectorLine(buffer_, "v ", v);
   }
   addFormattedSince(begin);
@@ -274,7 +285,12 @@ void ObjSequenceWriter::formatBody(const Frame& frame, const Body& body, const B
 
   begin = buffer_.size();
   computeBodyNormals(*topology_, frame.positions, body, normals_);
-  for (const Vec3f& n : normals_) appendVectorLine(buffer_, "vn ", n);
+  for (std::size_t i = 0; i < normals_.size(); ++i) {
+    requireFinite(path, normals_[i], [&] {
+      return cat("frame ", frame.number, ": body '", body.name, "': the normal of particle ", i);
+    });
+    appendVectorLine(buffer_, "vn ", normals_[i]);
+  }
   addFormattedSince(begin);
   addFixed(text.faces);
 }

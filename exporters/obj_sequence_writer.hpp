@@ -28,7 +28,8 @@ namespace softbake {
 class ObjSequenceWriter : public FrameSink {
  public:
   /// Keeps `topology` (shared, read-only) for the normals. Creates OUT/obj and
-  /// writes the material library at once, so an unwritable output fails before any simulation.
+  /// writes the material library at once, so an unwritable output or a UV that is not finite
+  /// fails before any simulation.
   /// `scene` becomes the file name stem: it must be non-empty and hold no '/' or whitespace.
   /// Body names are written with whitespace replaced by '_' and made unique. Throws
   /// softbake::Error.
@@ -36,8 +37,9 @@ class ObjSequenceWriter : public FrameSink {
                     const std::filesystem::path& outputDirectory, std::string scene,
                     int framePadding = 4);
 
-  /// Throws softbake::Error naming the body and frame for a non-finite position, or naming the
-  /// file when writing fails; no file is left behind for that frame either way.
+  /// Throws softbake::Error naming the file, and the body and frame, for a position, normal or
+  /// time that is not finite, or naming the file when writing fails; no file is left behind for
+  /// that frame either way.
   void write(const Frame& frame) override;
   const char* name() const override { return "obj"; }
   std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }
@@ -65,7 +67,9 @@ class ObjSequenceWriter : public FrameSink {
     std::size_t begin = 0, end = 0;
   };
 
-  void formatBody(const Frame& frame, const Body& body, const BodyText& text);
+  /// Throws softbake::Error naming `path` for a number that is not finite.
+  void formatBody(const Frame& frame, const Body& body, const BodyText& text,
+                  const std::filesystem::path& path);
   void addFixed(const std::string& text) { pieces_.push_back({&text}); }
   void addFormattedSince(std::size_t begin) { pieces_.push_back({nullptr, begin, buffer_.size()}); }
 

@@ -15,6 +15,7 @@
 #include "core/text.hpp"
 #include "exporters/mesh_level_set.hpp"
 #include "output/atomic_file.hpp"
+#include "output/finite_values.hpp"
 #include "output/version.hpp"
 
 namespace softbake {
@@ -109,7 +110,8 @@ void validate(const VdbOptions& options, const SceneTopology& topology) {
     throw Error(cat("VDB up axis '", options.upAxis, "' is invalid: use 'y' or 'z'"));
   if (options.compression == VdbOptions::Compression::Blosc && !bloscAvailable())
     throw Error("this OpenVDB build has no Blosc compression: use zip or none");
-  if (!(options.fps > 0)) throw Error(cat("VDB fps ", options.fps, " must be positive"));
+  if (!(options.fps > 0 && std::isfinite(options.fps)))
+    throw Error(cat("VDB fps ", options.fps, " must be a positive number"));
 
   const double voxel = automatic ? autoVoxelSize(topology) : options.voxelSize;
   if (!(voxel > 0))
@@ -256,6 +258,9 @@ void VdbSequenceWriter::write(const Frame& frame) {
                     " particle velocities for ", frame.positions.size(),
                     " positions: the VDB `vel` grid needs one per particle"));
 
+  const std::filesystem::path path = framePath(frame.number);
+  requireFinite(path, frame.time, [&] { return cat("frame ", frame.number, ": the time"); });
+
   openvdb::MetaMap metadata;
   metadata.insertMeta("frame", openvdb::Int32Metadata(frame.number));
   metadata.insertMeta("time", openvdb::DoubleMetadata(frame.time));
@@ -272,15 +277,22 @@ void VdbSequenceWriter::write(const Frame& frame) {
     points.resize(body.particleCount);
     for (Index i = 0; i < body.particleCount; ++i) {
       const Vec3& p = frame.positions[body.firstParticle + i];
-      if (!p.allFinite())
-        throw Error(cat("body '", body.name, "' has a non-finite position in frame ", frame.number,
-                        " (particle ", i, "): cannot write its VDB level set"));
+      requireFinite(path, p, [&] {
+        return cat("frame ", frame.number, ": body '", body.name, "': the position of particle ",
+                   i);
+      });
       points[i] = openvdb::Vec3s(toOutputAxes(p, up) / voxelSize_);
     }
     if (options_.velocity) {
       velocities.resize(body.particleCount);
-      for (Index i = 0; i < body.particleCount; ++i)
-        velocities[i] = openvdb::Vec3s(toOutputAxes(frame.velocities[body.firstParticle + i], up));
+      for (Index i = 0; i < body.particleCount; ++i) {
+        const Vec3& v = frame.velocities[body.firstParticle + i];
+        requireFinite(path, v, [&] {
+          return cat("frame ", frame.number, ": body '", body.name, "': the velocity of particle ",
+                     i);
+        });
+        velocities[i] = openvdb::Vec3s(toOutputAxes(v, up));
+      }
     }
     MeshLevelSet::Grids level =
         body.levelSet->build(points, options_.velocity ? velocities.data() : nullptr,
@@ -306,14 +318,21 @@ void VdbSequenceWriter::write(const Frame& frame) {
     }
   }
   if (options_.contacts && !frame.contacts.empty()) {
+    for (std::size_t i = 0; i < frame.contacts.size(); ++i) {
+      const Contact& c = frame.contacts[i];
+      requireFinite(path, c.position,
+                    [&] { return cat("frame ", frame.number, ": the position of contact ", i); });
+      requireFinite(path, c.normal,
+                    [&] { return cat("frame ", frame.number, ": the normal of contact ", i); });
+    }
     const openvdb::math::Transform::Ptr transform =
         openvdb::math::Transform::createLinearTransform(voxelSize_);
     openvdb::GridBase::Ptr contacts = contactGrid(frame.contacts, up, *transform);
     addMetadata(*contacts, metadata, "");
     grids.push_back(contacts);
   }
-  const std::uintmax_t size = writeGridsAtomically(framePath(frame.number), grids, metadata,
-                                                   compressionFlags(options_.compression));
+  const std::uintmax_t size =
+      writeGridsAtomically(path, grids, metadata, compressionFlags(options_.compression));
   bytes_.fetch_add(size, std::memory_order_relaxed);
 }
 

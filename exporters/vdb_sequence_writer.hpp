@@ -81,8 +81,9 @@ class VdbSequenceWriter : public FrameSink {
                     std::string scene, VdbOptions options, int framePadding = 4);
 
   /// Builds every grid of the frame and writes the file through a temporary name. Throws
-  /// softbake::Error for a frame without velocities when they are asked for, a non-finite
-  /// position, or a failed write; no file is left behind for that frame.
+  /// softbake::Error for a frame without velocities when they are asked for, a position,
+  /// velocity, contact or time that is not finite (naming the file and the value), or a failed
+  /// write; no file is left behind for that frame.
   void write(const Frame& frame) override;
   const char* name() const override { return "vdb"; }
   std::uint64_t bytesWritten() const override { return bytes_.load(std::memory_order_relaxed); }

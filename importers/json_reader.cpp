@@ -92,6 +92,30 @@ class DuplicateKeyCheck {
   std::vector<Frame> frames_;
 };
 
+// "line 3, column 5" of the character at `offset`.
+std::string lineAndColumn(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return cat("line ", line, ", column ", column);
+}
+
+// nlohmann's messages start "[json.exception.parse_error.101] "; the rest is for the user.
+std::string withoutExceptionId(std::string message) {
+  if (message.starts_with("[json.exception.")) {
+    const std::size_t end = message.find("] ");
+    if (end != std::string::npos) message.erase(0, end + 2);
+  }
+  return message;
+}
+
 }  // namespace
 
 nlohmann::json parseJsonText(std::string_view text, std::string_view source) {
@@ -99,25 +123,27 @@ nlohmann::json parseJsonText(std::string_view text, std::string_view source) {
     return nlohmann::json::parse(text.begin(), text.end(), DuplicateKeyCheck(source),
                                  /*allow_exceptions=*/true, /*ignore_comments=*/true);
   } catch (const nlohmann::json::parse_error& error) {
-    // error.byte is one past the character that broke the parse.
-    const std::size_t offset =
-        std::min<std::size_t>(error.byte > 0 ? error.byte - 1 : 0, text.size());
-    std::size_t line = 1, column = 1;
-    for (std::size_t i = 0; i < offset; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-    // nlohmann's message is "[json.exception.parse_error.101] parse error at line 3, column 5:
-    // <description>"; keep the description only.
-    std::string description = error.what();
+    // error.byte is one past the character that broke the parse. nlohmann's message is "parse
+    // error at line 3, column 5: <description>"; keep the description only.
+    std::string description = withoutExceptionId(error.what());
     const std::size_t columnAt = description.find(", column ");
     const std::size_t colon = description.find(": ", columnAt == std::string::npos ? 0 : columnAt);
     if (colon != std::string::npos) description.erase(0, colon + 2);
-    throw Error(cat(source, ": line ", line, ", column ", column, ": invalid JSON: ", description));
+    throw Error(cat(source, ": ", lineAndColumn(text, error.byte > 0 ? error.byte - 1 : 0),
+                    ": invalid JSON: ", description));
+  } catch (const nlohmann::json::exception& error) {
+    // A number too large for a double ("number overflow parsing '1e400'", found by fuzzing: it
+    // used to escape as nlohmann's own exception and abort the program). nlohmann says not
+    // where, so the number's text is looked up.
+    const std::string description = withoutExceptionId(error.what());
+    std::string where;
+    const std::size_t open = description.find('\'');
+    const std::size_t close = description.rfind('\'');
+    if (open != std::string::npos && close > open + 1) {
+      const std::size_t at = text.find(description.substr(open + 1, close - open - 1));
+      if (at != std::string_view::npos) where = cat(lineAndColumn(text, at), ": ");
+    }
+    throw Error(cat(source, ": ", where, "invalid JSON: ", description));
   }
 }
 

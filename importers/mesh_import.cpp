@@ -1,7 +1,9 @@
 #include "importers/mesh_import.hpp"
 
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/postprocess.h>
-#include <assimp/scene.h>
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/assimp_log.hpp"
+#include "importers/assimp_snapshot.hpp"
 #include "importers/import_losses.hpp"
 #include "importers/mesh_transform.hpp"
 #include "importers/ply_guard.hpp"
@@ -37,45 +40,45 @@ constexpr double kBytesPerVertex = 2 * sizeof(Vec3f) + sizeof(Vec2f);
 constexpr double kBytesPerTriangle = sizeof(Triangle);
 
 struct MeshInstance {
-  const aiMesh* mesh;
+  const SnapshotMesh* mesh;
   Eigen::Affine3d toWorld;
   std::string name;
 };
-
-Eigen::Affine3d toEigen(const aiMatrix4x4& m) {
-  Eigen::Matrix4d matrix;
-  matrix << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2,
-      m.d3, m.d4;
-  return Eigen::Affine3d(matrix);
-}
 
 // Loaders invent names like "<OFFRoot>" and "<3DSDummyRoot>" for nodes the file did not name.
 bool isMadeUpName(std::string_view name) {
   return name.empty() || (name.front() == '<' && name.back() == '>');
 }
 
-std::string instanceName(const aiNode& node, const aiMesh& mesh, const std::string& stem) {
-  if (!isMadeUpName(node.mName.C_Str())) return node.mName.C_Str();
-  if (!isMadeUpName(mesh.mName.C_Str())) return mesh.mName.C_Str();
+std::string instanceName(const SnapshotNode& node, const SnapshotMesh& mesh,
+                         const std::string& stem) {
+  if (!isMadeUpName(node.name)) return node.name;
+  if (!isMadeUpName(mesh.name)) return mesh.name;
   return stem;
 }
 
 // Depth-first in file order, without recursion: node depth comes from the file.
-std::vector<MeshInstance> collectInstances(const aiScene& scene, const std::string& stem) {
+std::vector<MeshInstance> collectInstances(const AssimpSnapshot& scene, const std::string& file,
+                                           const std::string& stem) {
   std::vector<MeshInstance> instances;
-  if (!scene.mRootNode) return instances;
-  std::vector<std::pair<const aiNode*, Eigen::Affine3d>> stack = {
-      {scene.mRootNode, toEigen(scene.mRootNode->mTransformation)}};
+  if (scene.nodes.empty()) return instances;
+  std::vector<std::pair<std::uint32_t, Eigen::Affine3d>> stack = {
+      {0, Eigen::Affine3d(scene.nodes[0].transform)}};
   while (!stack.empty()) {
-    const auto [node, toWorld] = stack.back();
+    const auto [index, toWorld] = stack.back();
     stack.pop_back();
-    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
-      const aiMesh* mesh = scene.mMeshes[node->mMeshes[i]];
-      instances.push_back({mesh, toWorld, instanceName(*node, *mesh, stem)});
+    const SnapshotNode& node = scene.nodes[index];
+    for (std::uint32_t m : node.meshes) {
+      if (m >= scene.meshes.size())
+        throw Error(
+            cat(file, ": node '", node.name, "' names mesh ", m, " of ", scene.meshes.size()));
+      instances.push_back({&scene.meshes[m], toWorld, instanceName(node, scene.meshes[m], stem)});
     }
-    for (unsigned i = node->mNumChildren; i-- > 0;) {
-      const aiNode* child = node->mChildren[i];
-      stack.emplace_back(child, toWorld * toEigen(child->mTransformation));
+    for (std::size_t i = node.children.size(); i-- > 0;) {
+      const std::uint32_t child = node.children[i];
+      if (child <= index || child >= scene.nodes.size())
+        throw Error(cat(file, ": node '", node.name, "' has a child out of order"));
+      stack.emplace_back(child, toWorld * Eigen::Affine3d(scene.nodes[child].transform));
     }
   }
   return instances;
@@ -103,42 +106,24 @@ struct DroppedPrimitives {
   std::size_t points = 0, lines = 0;
 };
 
-TriangleMesh toTriangleMesh(const MeshInstance& instance, DroppedPrimitives& dropped) {
-  const aiMesh& source = *instance.mesh;
+TriangleMesh toTriangleMesh(const std::string& file, const MeshInstance& instance,
+                            DroppedPrimitives& dropped) {
+  const SnapshotMesh& source = *instance.mesh;
+  dropped.points += source.points;
+  dropped.lines += source.lines;
   TriangleMesh mesh;
   mesh.name = instance.name;
-  mesh.triangles.reserve(source.mNumFaces);
-  for (unsigned f = 0; f < source.mNumFaces; ++f) {
-    const aiFace& face = source.mFaces[f];
-    if (face.mNumIndices == 3) {
-      mesh.triangles.push_back({face.mIndices[0], face.mIndices[1], face.mIndices[2]});
-    } else if (face.mNumIndices == 1) {
-      ++dropped.points;
-    } else {
-      ++dropped.lines;
-    }
-  }
-  if (mesh.triangles.empty()) return mesh;
-
-  mesh.positions.resize(source.mNumVertices);
-  for (unsigned v = 0; v < source.mNumVertices; ++v) {
-    const aiVector3D& p = source.mVertices[v];
-    mesh.positions[v] = Vec3f(p.x, p.y, p.z);
-  }
-  if (source.HasNormals()) {
-    mesh.normals.resize(source.mNumVertices);
-    for (unsigned v = 0; v < source.mNumVertices; ++v) {
-      const aiVector3D& n = source.mNormals[v];
-      mesh.normals[v] = Vec3f(n.x, n.y, n.z);
-    }
-  }
-  if (source.HasTextureCoords(0)) {
-    mesh.uvs.resize(source.mNumVertices);
-    for (unsigned v = 0; v < source.mNumVertices; ++v) {
-      const aiVector3D& uv = source.mTextureCoords[0][v];
-      mesh.uvs[v] = Vec2f(uv.x, uv.y);
-    }
-  }
+  if (source.triangles.empty()) return mesh;
+  // assimp validated the loader's scene; post-processing is trusted no further than this.
+  for (const Triangle& t : source.triangles)
+    for (Index v : t)
+      if (v >= source.positions.size())
+        throw Error(cat(file, ": mesh '", source.name, "': a face uses vertex ", v, " of ",
+                        source.positions.size()));
+  mesh.triangles = source.triangles;
+  mesh.positions = source.positions;
+  mesh.normals = source.normals;
+  mesh.uvs = source.uvs;
   transformMesh(mesh, instance.toWorld);
   return mesh;
 }
@@ -149,6 +134,14 @@ void requireFinite(const std::filesystem::path& path, const TriangleMesh& mesh) 
     if (!p.allFinite()) {
       throw Error(cat(path.string(), ": mesh '", mesh.name, "': vertex ", v,
                       " has non-finite coordinates (", p.x(), ", ", p.y(), ", ", p.z(), ")"));
+    }
+  }
+  // UVs go out again in every OBJ frame.
+  for (std::size_t v = 0; v < mesh.uvs.size(); ++v) {
+    const Vec2f& uv = mesh.uvs[v];
+    if (!uv.allFinite()) {
+      throw Error(cat(path.string(), ": mesh '", mesh.name, "': vertex ", v,
+                      " has non-finite texture coordinates (", uv.x(), ", ", uv.y(), ")"));
     }
   }
 }
@@ -193,34 +186,6 @@ TriangleMesh mergeAll(std::vector<TriangleMesh>& meshes, const std::filesystem::
   return merged;
 }
 
-// Vertices of the file's meshes that no face uses, as the loader returned them: post-processing
-// could split them off or drop them.
-std::size_t unusedVertices(const aiScene& scene) {
-  std::size_t unused = 0;
-  std::vector<char> used;
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
-    const aiMesh& mesh = *scene.mMeshes[m];
-    used.assign(mesh.mNumVertices, 0);
-    for (unsigned f = 0; f < mesh.mNumFaces; ++f)
-      for (unsigned i = 0; i < mesh.mFaces[f].mNumIndices; ++i)
-        if (mesh.mFaces[f].mIndices[i] < mesh.mNumVertices) used[mesh.mFaces[f].mIndices[i]] = 1;
-    unused += std::size_t(std::count(used.begin(), used.end(), 0));
-  }
-  return unused;
-}
-
-std::size_t vertexCount(const aiScene& scene) {
-  std::size_t vertices = 0;
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m) vertices += scene.mMeshes[m]->mNumVertices;
-  return vertices;
-}
-
-std::size_t faceCount(const aiScene& scene) {
-  std::size_t faces = 0;
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m) faces += scene.mMeshes[m]->mNumFaces;
-  return faces;
-}
-
 // One mesh, or all merged into one, or each named apart.
 void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& options,
                    ImportedMeshes& result) {
@@ -234,47 +199,45 @@ void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& o
 }
 
 ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImportOptions& options,
-                                const PlyPreparation* ply) {
+                                const PlyPreparation* ply, const AssimpRead& read) {
   const std::string file = path.string();
-  const AssimpLogCapture log;
-  Assimp::Importer importer;
-  // Validation only, so the scene can be inspected as the loader made it before post-processing.
-  const aiScene* scene = importer.ReadFile(file, aiProcess_ValidateDataStructure);
-  if (!scene) {
-    const std::string why = importer.GetErrorString();
-    if (why.find("No suitable reader found") != std::string::npos)
-      throw Error(cat(file, ": unsupported format (assimp: ", why, ")"));
-    throw Error(cat(file, ": cannot import (assimp: ", why, ")"));
+  // In a child process: a crash inside assimp ends there, as an error naming the file.
+  const AssimpSnapshot scene = takeAssimpSnapshotInChild(read, kPostProcess, file);
+  if (!scene.error.empty()) {
+    if (scene.error.find("No suitable reader found") != std::string::npos)
+      throw Error(cat(file, ": unsupported format (assimp: ", scene.error, ")"));
+    throw Error(cat(file, ": cannot import (assimp: ", scene.error, ")"));
   }
   std::vector<std::string> losses;
   if (ply) {
     losses = ply->losses;
-    compareWithHeader(ply->header, vertexCount(*scene), faceCount(*scene), losses);
+    compareWithHeader(ply->header, scene.loaderVertices, scene.loaderFaces, losses);
   }
   if (std::optional<std::string> loss =
-          unusedVertexLoss(unusedVertices(*scene), vertexCount(*scene)))
+          unusedVertexLoss(scene.unusedVertices, scene.loaderVertices))
     losses.push_back(std::move(*loss));
-  scene = importer.ApplyPostProcessing(kPostProcess);
-  if (!scene) throw Error(cat(file, ": cannot import (assimp: ", importer.GetErrorString(), ")"));
+  if (scene.emptyFaces > 0)
+    losses.push_back(
+        cat(scene.emptyFaces, scene.emptyFaces == 1 ? " face" : " faces", " with no corners"));
 
   // A message that says what was lost is told once, as a loss.
   std::vector<AssimpMessage> others;
-  for (const AssimpMessage& message : log.messages()) {
+  for (const AssimpMessage& message : scene.messages) {
     if (std::optional<std::string_view> lost = geometryLostIn(message.text))
       losses.push_back(cat(*lost, " (assimp: ", message.text, ")"));
     else
       others.push_back(message);
   }
   ImportedMeshes result;
-  result.warnings = describeAssimpMessages(file, others, log.unkept());
+  result.warnings = describeAssimpMessages(file, others, scene.unkeptMessages);
   settleLosses(file, losses, options.acceptLossy, result.warnings);
 
   const std::string stem = path.stem().string();
-  const std::vector<MeshInstance> instances = collectInstances(*scene, stem);
+  const std::vector<MeshInstance> instances = collectInstances(scene, file, stem);
   std::uint64_t vertices = 0, faces = 0;
   for (const MeshInstance& instance : instances) {
-    vertices += instance.mesh->mNumVertices;
-    faces += instance.mesh->mNumFaces;
+    vertices += instance.mesh->positions.size();
+    faces += instance.mesh->triangles.size() + instance.mesh->points + instance.mesh->lines;
   }
   requireWithinLimits(path, vertices, faces, options.limits);
   double bytes = double(vertices) * kBytesPerVertex + double(faces) * kBytesPerTriangle;
@@ -285,7 +248,7 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
 
   DroppedPrimitives dropped;
   for (const MeshInstance& instance : instances) {
-    TriangleMesh mesh = toTriangleMesh(instance, dropped);
+    TriangleMesh mesh = toTriangleMesh(file, instance, dropped);
     if (mesh.triangles.empty()) continue;
     requireFinite(path, mesh);
     result.meshes.push_back(std::move(mesh));
@@ -327,6 +290,34 @@ ImportedMeshes importPlyMesh(const std::filesystem::path& path, const MeshImport
   return result;
 }
 
+// One file, in memory, and nothing else: a fuzzed OBJ's `mtllib /dev/zero` or a glTF's buffer
+// URI must not reach the disk, and results must not depend on the current folder. (assimp's own
+// ReadFileFromMemory() serves every name that starts like its made-up file name, so an OBJ's
+// fallback material library, "<name>.mtl", is the OBJ itself, read as a material library.)
+class OneFileSystem : public Assimp::IOSystem {
+ public:
+  OneFileSystem(std::string name, std::string_view bytes) : name_(std::move(name)), bytes_(bytes) {}
+
+  bool Exists(const char* path) const override { return path && name_ == path; }
+  char getOsSeparator() const override { return '/'; }
+  Assimp::IOStream* Open(const char* path, const char* mode) override {
+    if (!Exists(path) || !mode || mode[0] != 'r') return nullptr;
+    return new Assimp::MemoryIOStream(reinterpret_cast<const std::uint8_t*>(bytes_.data()),
+                                      bytes_.size());
+  }
+  void Close(Assimp::IOStream* stream) override { delete stream; }
+
+ private:
+  std::string name_;
+  std::string_view bytes_;
+};
+
+std::string lowerExtension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
 }  // namespace
 
 ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImportOptions& options) {
@@ -343,17 +334,42 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
   requireImportMemory(path, double(fileSize), "reading the file", options.limits);
 
   try {
-    std::string extension = path.extension().string();
-    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
     std::optional<PlyPreparation> ply;
-    if (extension == ".ply" || isPlyFile(path)) {
+    if (lowerExtension(path) == ".ply" || isPlyFile(path)) {
       ply = preparePly(path, options.limits);
       if (ply->mesh) return importPlyMesh(path, options, *ply);
     }
-    return importWithAssimp(path, options, ply ? &*ply : nullptr);
+    return importWithAssimp(
+        path, options, ply ? &*ply : nullptr,
+        [&](Assimp::Importer& importer, unsigned flags) { return importer.ReadFile(file, flags); });
   } catch (const std::bad_alloc&) {
     throw Error(
         cat(file, ": mesh too large for this machine: ran out of memory while importing it"));
+  }
+}
+
+ImportedMeshes importMeshBuffer(std::string_view bytes, const std::string& name,
+                                const MeshImportOptions& options) {
+  const std::filesystem::path path(name);
+  // assimp's reader of memory refuses an empty buffer with "Invalid parameters".
+  if (bytes.empty()) throw Error(cat(name, ": the file is empty"));
+  requireImportMemory(path, double(bytes.size()), "reading the file", options.limits);
+  try {
+    const std::string extension = lowerExtension(path);
+    std::optional<PlyPreparation> ply;
+    if (extension == ".ply" || hasPlyMagic(bytes.substr(0, 3))) {
+      ply = preparePlyBuffer(bytes, name, options.limits);
+      if (ply->mesh) return importPlyMesh(path, options, *ply);
+    }
+    return importWithAssimp(path, options, ply ? &*ply : nullptr,
+                            [&](Assimp::Importer& importer, unsigned flags) {
+                              // The importer owns it.
+                              importer.SetIOHandler(new OneFileSystem(name, bytes));
+                              return importer.ReadFile(name, flags);
+                            });
+  } catch (const std::bad_alloc&) {
+    throw Error(
+        cat(name, ": mesh too large for this machine: ran out of memory while importing it"));
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
@@ -35,5 +36,12 @@ struct ImportedMeshes {
 /// options.limits or too large for this machine's memory.
 ImportedMeshes importMeshFile(const std::filesystem::path& path,
                               const MeshImportOptions& options = {});
+
+/// The same for a file already in memory (the fuzz targets feed it bytes). `name` names it in
+/// messages, and its extension tells assimp the format, which an OBJ's content does not. Only
+/// `bytes` is read: companion files (an OBJ's .mtl, a glTF's .bin) are not looked for, so a file
+/// that needs one fails as if it were missing.
+ImportedMeshes importMeshBuffer(std::string_view bytes, const std::string& name,
+                                const MeshImportOptions& options = {});
 
 }  // namespace softbake

@@ -29,9 +29,17 @@ std::string threeDigits(double x) {
 }  // namespace
 
 SceneFile sceneFromMeshFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
-  ImportedMeshes imported = importMeshFile(path, {.mergeMeshes = false,
-                                                  .acceptLossy = options.acceptLossyImport,
-                                                  .limits = options.importLimits()});
+  return sceneFromMeshes(importMeshFile(path, meshSceneImportOptions(options)), path, options);
+}
+
+MeshImportOptions meshSceneImportOptions(const SceneLoadOptions& options) {
+  return {.mergeMeshes = false,
+          .acceptLossy = options.acceptLossyImport,
+          .limits = options.importLimits()};
+}
+
+SceneFile sceneFromMeshes(ImportedMeshes imported, const std::filesystem::path& path,
+                          const SceneLoadOptions& options) {
   if (imported.meshes.size() > options.maxBodies)
     throw Error(cat(path.string(), ": ", imported.meshes.size(),
                     " meshes make as many bodies, above the limit of ", options.maxBodies,

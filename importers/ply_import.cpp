@@ -1,5 +1,7 @@
 #include "importers/ply_import.hpp"
 
+#include <algorithm>
+
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/ply_data.hpp"
@@ -24,36 +26,36 @@ std::uint64_t declared(const PlyHeader& header, std::string_view name) {
   return 0;
 }
 
-}  // namespace
-
-PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits& limits) {
-  const std::string file = path.string();
-  PlyPreparation result;
-  result.header = checkPlyFile(path);
-  const PlyHeader& header = result.header;
-  // Before anything is allocated for them: the header may lie.
+// Before anything is allocated for them: the header may lie.
+void requireDeclaredWithin(const std::filesystem::path& path, const PlyHeader& header,
+                           const ImportLimits& limits) {
   requireWithinLimits(path, declared(header, "vertex"), declared(header, "face"), limits);
   double values = 0;
   for (const PlyElement& element : header.elements)
     values += double(element.count) * double(element.propertyCount);
   requireImportMemory(path, values * kPlyBytesPerValue, "reading the PLY file", limits);
+}
 
-  const std::string bytes = readWholeFile(file);
-  const std::string_view data = std::string_view(bytes).substr(
-      std::min<std::size_t>(bytes.size(), std::size_t(header.dataOffset)));
-  const std::vector<std::uint64_t> rows = countPlyRows(header, data, file);
-  for (std::size_t e = 0; e < header.elements.size(); ++e) {
-    const PlyElement& element = header.elements[e];
+// What the data holds against what the header declares, and the strips.
+PlyPreparation prepareData(PlyHeader header, std::string_view bytes, const std::string& file) {
+  PlyPreparation result;
+  result.header = std::move(header);
+  const PlyHeader& parsed = result.header;
+  const std::string_view data =
+      bytes.substr(std::min<std::size_t>(bytes.size(), std::size_t(parsed.dataOffset)));
+  const std::vector<std::uint64_t> rows = countPlyRows(parsed, data, file);
+  for (std::size_t e = 0; e < parsed.elements.size(); ++e) {
+    const PlyElement& element = parsed.elements[e];
     if (rows[e] == element.count) continue;
     const std::string shortfall =
         cat("the header declares ", rowsOf(element, element.count), ", the file holds ", rows[e]);
-    if (header.format != PlyFormat::kAscii)
+    if (parsed.format != PlyFormat::kAscii)
       throw Error(cat(file, ": PLY data: ", shortfall, " (truncated file)"));
     result.losses.push_back(shortfall);
   }
 
-  if (hasTriangleStrips(header)) {
-    PlyStripMesh strips = readPlyStripMesh(header, data, file);
+  if (hasTriangleStrips(parsed)) {
+    PlyStripMesh strips = readPlyStripMesh(parsed, data, file);
     for (std::string& loss : strips.losses) result.losses.push_back(std::move(loss));
     result.notes.push_back(cat(file, ": read ", strips.stripTriangles,
                                " triangles from its triangle strips (assimp 5.2 reads one)"));
@@ -63,6 +65,23 @@ PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits&
     result.mesh = std::move(strips.mesh);
   }
   return result;
+}
+
+}  // namespace
+
+PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits& limits) {
+  const std::string file = path.string();
+  PlyHeader header = checkPlyFile(path);
+  requireDeclaredWithin(path, header, limits);
+  const std::string bytes = readWholeFile(file);
+  return prepareData(std::move(header), bytes, file);
+}
+
+PlyPreparation preparePlyBuffer(std::string_view bytes, const std::string& name,
+                                const ImportLimits& limits) {
+  PlyHeader header = parsePlyHeader(bytes.substr(0, kMaxPlyHeaderBytes), bytes.size(), name);
+  requireDeclaredWithin(name, header, limits);
+  return prepareData(std::move(header), bytes, name);
 }
 
 void compareWithHeader(const PlyHeader& header, std::size_t vertices, std::size_t faces,

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
@@ -31,6 +32,10 @@ struct PlyPreparation {
 /// read past its end), or strips it cannot read; an ascii file cut short is a loss, since assimp
 /// pads it with copies of its last row.
 PlyPreparation preparePly(const std::filesystem::path& path, const ImportLimits& limits);
+
+/// The same for a file already in memory, `name` naming it in messages.
+PlyPreparation preparePlyBuffer(std::string_view bytes, const std::string& name,
+                                const ImportLimits& limits);
 
 /// Adds a loss when assimp's scene, before post-processing, has fewer vertices or faces than the
 /// header declares.

@@ -188,6 +188,12 @@ class SceneParser {
       } catch (const Error& importError) {
         value.fail(importError.what());
       }
+      std::uint64_t vertices = 0, faces = 0;
+      for (const TriangleMesh& mesh : imported.meshes) {
+        vertices += mesh.positions.size();
+        faces += mesh.triangles.size();
+      }
+      addToScene(value, vertices, faces);
       for (std::string& note : imported.notes) scene_.notes.push_back(std::move(note));
       for (std::string& warning : imported.warnings)
         scene_.warnings.push_back(cat(source_, ": ", value.path(), ": ", warning));
@@ -203,11 +209,30 @@ class SceneParser {
       if (auto s = object.find("subdivisions"))
         subdivisions = int(s->integerIn(0, kMaxSubdivisions));
       if (auto r = object.find("radius")) radius = float(r->numberAbove(0));
+      // Before it is made: 4^subdivisions times an icosahedron's 20 faces and 30 edges.
+      const std::uint64_t grow = std::uint64_t(1) << (2 * subdivisions);
+      addToScene(value, 10 * grow + 2, 20 * grow);
       TriangleMesh mesh = makeIcosphere(subdivisions, radius);
       mesh.name = "icosphere";
       return {std::move(mesh)};
     }
     value.fail("expected string (a mesh file) or object (a primitive)");
+  }
+
+  // The scene's meshes together stay within the caps of one mesh file. A few lines of JSON can ask
+  // for thousands of finely subdivided spheres (found by fuzzing), which would take all of the
+  // machine's memory before anything after loading could refuse them.
+  void addToScene(const JsonValue& value, std::uint64_t vertices, std::uint64_t faces) {
+    const ImportLimits limits = options_.importLimits(limits_);
+    sceneVertices_ += vertices;
+    sceneFaces_ += faces;
+    if (sceneFaces_ > limits.maxFaces)
+      value.fail(cat("the scene's meshes come to ", sceneFaces_, " triangles, above the limit of ",
+                     limits.maxFaces, " (--max-faces or settings.import.max_faces raises it)"));
+    if (sceneVertices_ > limits.maxVertices)
+      value.fail(cat("the scene's meshes come to ", sceneVertices_,
+                     " vertices, above the limit of ", limits.maxVertices,
+                     " (--max-vertices or settings.import.max_vertices raises it)"));
   }
 
   static Eigen::Affine3d parseTransform(const JsonValue& value) {
@@ -414,7 +439,8 @@ class SceneParser {
   std::string_view source_;
   std::filesystem::path baseDirectory_;
   SceneLoadOptions options_;
-  ImportLimits limits_;  // the defaults, then the scene's
+  ImportLimits limits_;                               // the defaults, then the scene's
+  std::uint64_t sceneVertices_ = 0, sceneFaces_ = 0;  // of every mesh read so far
   SceneFile scene_;
 };
 
@@ -430,6 +456,12 @@ ImportLimits SceneLoadOptions::importLimits(ImportLimits scene) const {
 SceneFile parseScene(const nlohmann::json& json, std::string_view source,
                      const std::filesystem::path& baseDirectory, const SceneLoadOptions& options) {
   return SceneParser(source, baseDirectory, options).parse(json);
+}
+
+SceneFile parseSceneText(std::string_view text, std::string_view source,
+                         const std::filesystem::path& baseDirectory,
+                         const SceneLoadOptions& options) {
+  return parseScene(parseJsonText(text, source), source, baseDirectory, options);
 }
 
 SceneFile loadSceneFile(const std::filesystem::path& path, const SceneLoadOptions& options) {

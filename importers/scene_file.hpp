@@ -13,6 +13,7 @@
 
 #include "core/scene/scene_setup.hpp"
 #include "importers/import_limits.hpp"
+#include "importers/mesh_import.hpp"
 
 namespace softbake {
 
@@ -73,6 +74,12 @@ SceneFile parseScene(const nlohmann::json& json, std::string_view source,
                      const std::filesystem::path& baseDirectory,
                      const SceneLoadOptions& options = {});
 
+/// The same from a scene file's text (parseJsonText(), then parseScene()), as loadSceneFile()
+/// reads it; the scene fuzz target starts here.
+SceneFile parseSceneText(std::string_view text, std::string_view source,
+                         const std::filesystem::path& baseDirectory,
+                         const SceneLoadOptions& options = {});
+
 /// The JSON text of the built-in default scene: two soft balls thrown at each other over a ground
 /// plane, 240 frames at 24 fps. examples/default.json is a copy, checked by a test.
 std::string_view defaultSceneJson();
@@ -84,6 +91,14 @@ SceneFile defaultScene();
 /// about a metre when far from it (noted), dropped from above a ground plane.
 SceneFile sceneFromMeshFile(const std::filesystem::path& path,
                             const SceneLoadOptions& options = {});
+
+/// The import options sceneFromMeshFile() reads its file with.
+MeshImportOptions meshSceneImportOptions(const SceneLoadOptions& options);
+
+/// The scene sceneFromMeshFile() makes, from meshes already imported (from memory, say) with
+/// meshSceneImportOptions(); `path` names the file in messages and the scene after its stem.
+SceneFile sceneFromMeshes(ImportedMeshes imported, const std::filesystem::path& path,
+                          const SceneLoadOptions& options = {});
 
 /// `name` with every '/', '\\' and whitespace replaced by '_', so it can be a file stem and an OBJ
 /// `mtllib` argument ("my ball.fbx" gives the scene "my_ball").

@@ -2,7 +2,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "output/finite_values.hpp"
 #include "output/version.hpp"
 
 namespace softbake {
@@ -51,7 +53,10 @@ std::string manifestJson(const Manifest& manifest) {
 }
 
 void writeManifest(const std::filesystem::path& outputDirectory, const Manifest& manifest) {
-  writeFileAtomically(outputDirectory / "manifest.json", manifestJson(manifest));
+  const std::filesystem::path path = outputDirectory / "manifest.json";
+  // JSON has no NaN: nlohmann would write null for it.
+  requireFinite(path, manifest.fps, [] { return std::string("the scene's fps"); });
+  writeFileAtomically(path, manifestJson(manifest));
 }
 
 }  // namespace softbake

@@ -45,7 +45,8 @@ Manifest describeScene(const SceneTopology& topology, std::string scene, int fra
 /// The JSON text, keys in a fixed order, ending in a newline.
 std::string manifestJson(const Manifest& manifest);
 
-/// Writes OUT/manifest.json atomically. Throws softbake::Error naming the file.
+/// Writes OUT/manifest.json atomically. Throws softbake::Error naming the file when writing fails
+/// or the fps is not finite (then nothing is written).
 void writeManifest(const std::filesystem::path& outputDirectory, const Manifest& manifest);
 
 }  // namespace softbake

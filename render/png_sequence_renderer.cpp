@@ -1,6 +1,8 @@
 #include "render/png_sequence_renderer.hpp"
 
+#include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "output/finite_values.hpp"
 
 namespace softbake {
 
@@ -25,16 +27,28 @@ void PngSequenceRenderer::collectPending() {
 }
 
 void PngSequenceRenderer::write(const Frame& frame) {
+  // A vertex that is not finite draws as nothing or as a streak across the image, which looks
+  // like a rendering bug: the frame is refused instead, as the OBJ writer refuses it.
+  const std::filesystem::path path = framePath(frame.number);
+  for (const Body& body : scene_.topology->bodies)
+    for (Index i = 0; i < body.particleCount && body.firstParticle + i < frame.positions.size();
+         ++i)
+      requireFinite(path, frame.positions[body.firstParticle + i], [&] {
+        return cat("frame ", frame.number, ": body '", body.name, "': the position of particle ",
+                   i);
+      });
+  for (std::size_t i = 0; i < frame.contacts.size(); ++i)
+    requireFinite(path, frame.contacts[i].position,
+                  [&] { return cat("frame ", frame.number, ": the position of contact ", i); });
   if (!renderer_) renderer_ = std::make_unique<FrameRenderer>(scene_, options_);
   std::vector<std::uint8_t> rgb = renderer_->renderRgb(frame);
   // The previous frame's encoding ran while this one rendered; its error, if any, surfaces here.
   collectPending();
-  pending_ =
-      std::async(std::launch::async, [this, rgb = std::move(rgb), path = framePath(frame.number)] {
-        const std::string png = encodePng(rgb, options_.width, options_.height);
-        writeFileAtomically(path, png);
-        return std::uint64_t(png.size());
-      });
+  pending_ = std::async(std::launch::async, [this, rgb = std::move(rgb), path] {
+    const std::string png = encodePng(rgb, options_.width, options_.height);
+    writeFileAtomically(path, png);
+    return std::uint64_t(png.size());
+  });
 }
 
 void PngSequenceRenderer::finish() {

@@ -32,6 +32,8 @@ class PngSequenceRenderer : public FrameSink {
                       RenderOptions options = {}, int framePadding = 4);
   ~PngSequenceRenderer() override;
 
+  /// Throws softbake::Error naming the PNG for a position or contact that is not finite; nothing
+  /// is rendered or written for that frame.
   void write(const Frame& frame) override;
   /// Releases the context and the GL objects on the rendering thread.
   void finish() override;

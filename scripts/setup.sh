@@ -1,10 +1,21 @@
 #!/usr/bin/env bash
 # Brings a Debian 12 machine to a built softbake: installs the Debian packages that are missing,
 # configures and builds (Release, ./build). Safe to run again; it only does what is left to do.
+#   --fuzz-tools         also install clang and libFuzzer (scripts/fuzz.sh)
+#   --packages-only      install what is missing, then stop: no configure, no build
 #   SOFTBAKE_BUILD_DIR   build folder (default: build)
 #   SOFTBAKE_CMAKE_ARGS  extra arguments for the CMake configure step
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+fuzz_tools=false packages_only=false
+for argument in "$@"; do
+  case "$argument" in
+    --fuzz-tools) fuzz_tools=true ;;
+    --packages-only) packages_only=true ;;
+    *) echo "setup: unknown argument '$argument'" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
   g++ make cmake pkg-config            # a fresh Debian has no compiler; cmake only recommends make
@@ -19,6 +30,11 @@ packages=(
   libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
 )
+if $fuzz_tools; then
+  # libFuzzer ships in clang's runtime package; llvm gives llvm-symbolizer, so a finding's stack
+  # has function names and lines.
+  packages+=(clang libclang-rt-14-dev llvm)
+fi
 missing=()
 for package in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
@@ -35,6 +51,8 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
     "${missing[@]}" >/dev/null
 fi
+
+$packages_only && exit 0
 
 build_dir=${SOFTBAKE_BUILD_DIR:-build}
 [ -f "$build_dir/CMakeCache.txt" ] || echo "setup: configuring and building in $build_dir (the first build takes a few minutes)" >&2

@@ -349,7 +349,9 @@ void SbhashBroadPhase::trianglePairs(const BroadPhaseInput& input,
     };
     const std::size_t stop = std::min(leafPairs_.size(), (chunk + 1) * perChunk);
     for (std::size_t k = chunk * perChunk; k < stop; ++k) {
-      const auto [a, b] = leafPairs_[k];
+      // Not a structured binding: clang before 16 cannot capture one in the lambda below, and
+      // the fuzz tree builds with clang 14.
+      const Index a = leafPairs_[k][0], b = leafPairs_[k][1];
       const SurfaceLeaves &sa = surfaces_[leafSurface_[a]], &sb = surfaces_[leafSurface_[b]];
       const Leaf &la = sa.leaves[leafIndex_[a]], &lb = sb.leaves[leafIndex_[b]];
       // Step 5 of the file comment: boxes overlap, this leaf pair owns the pair, eligible.

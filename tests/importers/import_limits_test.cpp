@@ -88,6 +88,26 @@ TEST(ImportLimits, TheSceneSetsTheCapsAndTheCommandLineWins) {
       StartsWith("scene.json: settings.import.max_memory_mib: expected an integer in [1, "));
 }
 
+// Found by fuzzing: a few lines asking for many finely subdivided spheres took all the memory
+// there was. The scene's meshes together stay within the caps of one file, counted before each
+// primitive is made.
+TEST(ImportLimits, TheWholeScenesMeshesStayWithinTheCaps) {
+  const std::string body = R"({"mesh": {"primitive": "icosphere", "subdivisions": 7}})";
+  const std::string two = cat(R"({"bodies": [)", body, ",", body, "]}");
+  EXPECT_EQ(errorOf([&] { sceneOf(two, {.maxFaces = 400'000}); }),
+            "scene.json: bodies[1].mesh: the scene's meshes come to 655360 triangles, above the "
+            "limit of 400000 (--max-faces or settings.import.max_faces raises it)");
+  EXPECT_EQ(errorOf([&] { sceneOf(two, {.maxVertices = 300'000}); }),
+            "scene.json: bodies[1].mesh: the scene's meshes come to 327684 vertices, above the "
+            "limit of 300000 (--max-vertices or settings.import.max_vertices raises it)");
+  EXPECT_EQ(sceneOf(two, {.maxFaces = 655'360}).setup.bodies.size(), 2u);
+  // Files count too: the box has 12 triangles.
+  const std::string boxes = cat(R"({"bodies": [{"mesh": ")", box().string(), R"("}, {"mesh": ")",
+                                box().string(), R"("}]})");
+  EXPECT_THAT(errorOf([&] { sceneOf(boxes, {.maxFaces = 20}); }),
+              StartsWith("scene.json: bodies[1].mesh: the scene's meshes come to 24 triangles"));
+}
+
 TEST(ImportLimits, TooManyBodiesAreRefusedBeforeAnyMeshIsRead) {
   // The mesh files do not exist: the count is checked first.
   const std::string scene =

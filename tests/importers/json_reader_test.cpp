@@ -35,6 +35,16 @@ TEST(JsonReader, SyntaxErrorsNameLineAndColumn) {
               ::testing::StartsWith("scene.json: line 1, column 1: invalid JSON: "));
 }
 
+// Found by fuzzing: nlohmann reports a number too large for a double as an out_of_range
+// exception, which escaped the reader and aborted the program.
+TEST(JsonReader, NumbersTooLargeForADoubleAreSyntaxErrorsWithTheirPlace) {
+  EXPECT_EQ(parseError("{\n  \"fps\": 1e400\n}\n"),
+            "scene.json: line 2, column 10: invalid JSON: number overflow parsing '1e400'");
+  EXPECT_EQ(parseError("[-5555000124091491e3085639778]"),
+            "scene.json: line 1, column 2: invalid JSON: number overflow parsing "
+            "'-5555000124091491e3085639778'");
+}
+
 TEST(JsonReader, AllowsComments) {
   const nlohmann::json json =
       parseJsonText("{ // the frame rate\n \"fps\": 30 /* per second */ }", "s");

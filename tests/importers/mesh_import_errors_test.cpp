@@ -3,7 +3,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <limits>
+#include <string>
 
 #include "core/error.hpp"
 #include "importers/memory_budget.hpp"
@@ -56,6 +58,26 @@ TEST(MeshImportErrors, NonFiniteCoordinates) {
   EXPECT_THAT(importError(file),
               StartsWith(file.string() +
                          ": mesh 'defaultobject': vertex 1 has non-finite coordinates (inf"));
+}
+
+// UVs are written again in every OBJ frame: a NaN there would reach the output. (assimp's OBJ
+// reader turns an overflowing `vt` into 0, so the NaN comes in a binary PLY.)
+TEST(MeshImportErrors, NonFiniteTextureCoordinates) {
+  test::ScratchDir dir;
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nproperty float u\nproperty float v\n"
+      "element face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float vertices[3][5] = {{0, 0, 0, 0, 0}, {1, 0, 0, nan, 0}, {0, 1, 0, 0, 1}};
+  ply.append(reinterpret_cast<const char*>(vertices), sizeof vertices);
+  const std::uint32_t face[3] = {0, 1, 2};
+  ply += char(3);
+  ply.append(reinterpret_cast<const char*>(face), sizeof face);
+  const auto file = dir.write("nan_uv.ply", ply);
+  EXPECT_EQ(
+      importError(file),
+      file.string() + ": mesh 'nan_uv': vertex 1 has non-finite texture coordinates (nan, 0)");
 }
 
 TEST(MeshImportErrors, PlyHeadersAreCheckedBeforeAssimpSeesThem) {

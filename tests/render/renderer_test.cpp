@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -261,6 +262,27 @@ TEST(PngSequenceRenderer, WritesNumberedPngsFromThePipelineThread) {
   EXPECT_NE(readFile(out.path() / "png" / "ball_0001.png"),
             readFile(out.path() / "png" / "ball_0003.png"));
   EXPECT_GT(pipeline.bytesWritten(), 0u);
+}
+
+// Checked before anything is rendered, so it needs no EGL display.
+TEST(PngSequenceRenderer, AFrameWithANaNPositionIsRefusedNamingThePngAndWritesNothing) {
+  const auto world = makeBallTopology();
+  ScratchDirectory out;
+  PngSequenceRenderer sink(world, out.path(), "ball", smallOptions(), 4);
+  Frame frame = initialFrame(world);
+  frame.number = 5;
+  frame.positions[17] = Vec3(0, std::numeric_limits<Scalar>::quiet_NaN(), 0);
+  try {
+    sink.write(frame);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(std::string(error.what()),
+              sink.framePath(5).string() +
+                  ": not written: frame 5: body 'ball': the position of particle 17 is not "
+                  "finite (0, nan, 0)");
+  }
+  sink.finish();
+  EXPECT_TRUE(std::filesystem::is_empty(out.path() / "png"));
 }
 
 TEST(EglContext, AnInvalidPlatformFailsWithTheDebianPackages) {

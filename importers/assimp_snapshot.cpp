@@ -1,0 +1,400 @@
+#include "importers/assimp_snapshot.hpp"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <assimp/Importer.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <new>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "core/error.hpp"
+#include "core/text.hpp"
+#include "importers/assimp_guards.hpp"
+
+namespace softbake {
+
+namespace {
+
+// ---- reading the scene -------------------------------------------------------------------------
+
+std::uint64_t vertexCount(const aiScene& scene) {
+  std::uint64_t vertices = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) vertices += scene.mMeshes[m]->mNumVertices;
+  return vertices;
+}
+
+std::uint64_t faceCount(const aiScene& scene) {
+  std::uint64_t faces = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) faces += scene.mMeshes[m]->mNumFaces;
+  return faces;
+}
+
+// Vertices of the file's meshes that no face uses, as the loader returned them: post-processing
+// could split them off or drop them.
+std::uint64_t unusedVertices(const aiScene& scene) {
+  std::uint64_t unused = 0;
+  std::vector<char> used;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    used.assign(mesh.mNumVertices, 0);
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f)
+      for (unsigned i = 0; i < mesh.mFaces[f].mNumIndices; ++i)
+        if (mesh.mFaces[f].mIndices[i] < mesh.mNumVertices) used[mesh.mFaces[f].mIndices[i]] = 1;
+    unused += std::uint64_t(std::count(used.begin(), used.end(), 0));
+  }
+  return unused;
+}
+
+SnapshotMesh copyMesh(const aiMesh& source) {
+  SnapshotMesh mesh;
+  mesh.name = source.mName.C_Str();
+  mesh.triangles.reserve(source.mNumFaces);
+  for (unsigned f = 0; f < source.mNumFaces; ++f) {
+    const aiFace& face = source.mFaces[f];
+    if (face.mNumIndices == 3)
+      mesh.triangles.push_back({face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+    else if (face.mNumIndices == 1)
+      ++mesh.points;
+    else
+      ++mesh.lines;
+  }
+  mesh.positions.resize(source.mNumVertices);
+  for (unsigned v = 0; v < source.mNumVertices; ++v) {
+    const aiVector3D& p = source.mVertices[v];
+    mesh.positions[v] = Vec3f(p.x, p.y, p.z);
+  }
+  if (source.HasNormals()) {
+    mesh.normals.resize(source.mNumVertices);
+    for (unsigned v = 0; v < source.mNumVertices; ++v) {
+      const aiVector3D& n = source.mNormals[v];
+      mesh.normals[v] = Vec3f(n.x, n.y, n.z);
+    }
+  }
+  if (source.HasTextureCoords(0)) {
+    mesh.uvs.resize(source.mNumVertices);
+    for (unsigned v = 0; v < source.mNumVertices; ++v) {
+      const aiVector3D& uv = source.mTextureCoords[0][v];
+      mesh.uvs[v] = Vec2f(uv.x, uv.y);
+    }
+  }
+  return mesh;
+}
+
+SnapshotNode copyNode(const aiNode& source) {
+  SnapshotNode node;
+  node.name = source.mName.C_Str();
+  const aiMatrix4x4& m = source.mTransformation;
+  node.transform << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1,
+      m.d2, m.d3, m.d4;
+  node.meshes.assign(source.mMeshes, source.mMeshes + source.mNumMeshes);
+  return node;
+}
+
+// Without recursion, since node depth comes from the file; a node met twice is copied once.
+std::vector<SnapshotNode> copyNodes(const aiNode* root) {
+  std::vector<SnapshotNode> nodes;
+  if (!root) return nodes;
+  std::unordered_set<const aiNode*> seen = {root};
+  std::vector<std::pair<const aiNode*, std::uint32_t>> stack = {{root, 0}};
+  nodes.push_back(copyNode(*root));
+  while (!stack.empty()) {
+    const auto [node, index] = stack.back();
+    stack.pop_back();
+    for (unsigned c = 0; c < node->mNumChildren; ++c) {
+      const aiNode* child = node->mChildren[c];
+      if (!child || !seen.insert(child).second) continue;
+      const auto childIndex = std::uint32_t(nodes.size());
+      nodes[index].children.push_back(childIndex);
+      nodes.push_back(copyNode(*child));
+      stack.emplace_back(child, childIndex);
+    }
+  }
+  return nodes;
+}
+
+// ---- the byte form -----------------------------------------------------------------------------
+
+// Every value goes as its bytes: both ends are the same program on the same machine.
+class Writer {
+ public:
+  explicit Writer(int fd) : fd_(fd) {}
+  ~Writer() { flush(); }
+
+  void bytes(const void* data, std::size_t size) {
+    const char* p = static_cast<const char*>(data);
+    while (size > 0 && ok_) {
+      const std::size_t room = std::min(size, kBuffer - used_);
+      std::memcpy(buffer_ + used_, p, room);
+      used_ += room;
+      p += room;
+      size -= room;
+      if (used_ == kBuffer) flush();
+    }
+  }
+  void number(std::uint64_t value) { bytes(&value, sizeof value); }
+  void text(const std::string& value) {
+    number(value.size());
+    bytes(value.data(), value.size());
+  }
+  // Plain values: numbers, Eigen's fixed-size vectors and matrices, std::array.
+  template <class T>
+  void values(const std::vector<T>& items) {
+    number(items.size());
+    bytes(items.data(), items.size() * sizeof(T));
+  }
+  bool flush() {
+    for (std::size_t done = 0; ok_ && done < used_;) {
+      const ssize_t wrote = ::write(fd_, buffer_ + done, used_ - done);
+      if (wrote < 0 && errno == EINTR) continue;
+      if (wrote <= 0)
+        ok_ = false;
+      else
+        done += std::size_t(wrote);
+    }
+    used_ = 0;
+    return ok_;
+  }
+
+ private:
+  static constexpr std::size_t kBuffer = 1 << 16;
+  int fd_;
+  char buffer_[kBuffer];
+  std::size_t used_ = 0;
+  bool ok_ = true;
+};
+
+class Reader {
+ public:
+  explicit Reader(int fd) : fd_(fd) {}
+
+  void bytes(void* data, std::size_t size) {
+    char* p = static_cast<char*>(data);
+    while (size > 0) {
+      const ssize_t got = ::read(fd_, p, size);
+      if (got < 0 && errno == EINTR) continue;
+      if (got < 0) throw std::runtime_error(cat("read failed: ", std::strerror(errno)));
+      if (got == 0) throw std::runtime_error("the answer ends early");
+      p += got;
+      size -= std::size_t(got);
+    }
+  }
+  std::uint64_t number() {
+    std::uint64_t value = 0;
+    bytes(&value, sizeof value);
+    return value;
+  }
+  std::string text() {
+    std::string value;
+    readGrowing(value);
+    return value;
+  }
+  template <class T>
+  std::vector<T> values() {
+    std::vector<T> items;
+    readGrowing(items);
+    return items;
+  }
+
+ private:
+  // In slices, so a length that the stream does not back up ends at its end instead of in one
+  // huge allocation.
+  template <class Container>
+  void readGrowing(Container& items) {
+    using T = typename Container::value_type;
+    std::uint64_t left = number();
+    constexpr std::uint64_t kSlice = (1 << 20) / sizeof(T) + 1;
+    while (left > 0) {
+      const std::size_t slice = std::size_t(std::min(left, kSlice));
+      const std::size_t old = items.size();
+      items.resize(old + slice);
+      bytes(items.data() + old, slice * sizeof(T));
+      left -= slice;
+    }
+  }
+
+  int fd_;
+};
+
+// The first bytes of every answer: a child that died before writing them sent nothing.
+constexpr std::uint64_t kMagic = 0x736f667462616b65;  // "softbake"
+
+void closeQuietly(int fd) {
+  while (::close(fd) < 0 && errno == EINTR) {
+  }
+}
+
+}  // namespace
+
+AssimpSnapshot takeAssimpSnapshot(const AssimpRead& read, unsigned postProcess) {
+  AssimpSnapshot snapshot;
+  const AssimpLogCapture log;
+  Assimp::Importer importer;
+  // Validation only, so the scene can be inspected as the loader made it before post-processing.
+  const aiScene* scene = read(importer, aiProcess_ValidateDataStructure);
+  if (scene) {
+    snapshot.loaderVertices = vertexCount(*scene);
+    snapshot.loaderFaces = faceCount(*scene);
+    snapshot.unusedVertices = unusedVertices(*scene);
+    snapshot.emptyFaces = dropEmptyFaces(*scene);
+    matchPrimitiveTypesToFaces(*scene);
+    scene = importer.ApplyPostProcessing(postProcess);
+  }
+  if (scene) {
+    snapshot.meshes.reserve(scene->mNumMeshes);
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+      snapshot.meshes.push_back(copyMesh(*scene->mMeshes[m]));
+    snapshot.nodes = copyNodes(scene->mRootNode);
+  } else {
+    snapshot.error = importer.GetErrorString();
+    if (snapshot.error.empty()) snapshot.error = "unknown error";
+  }
+  snapshot.messages = log.messages();
+  snapshot.unkeptMessages = log.unkept();
+  return snapshot;
+}
+
+bool writeAssimpSnapshot(int fd, const AssimpSnapshot& snapshot) {
+  Writer out(fd);
+  out.number(kMagic);
+  out.text(snapshot.error);
+  out.number(snapshot.loaderVertices);
+  out.number(snapshot.loaderFaces);
+  out.number(snapshot.unusedVertices);
+  out.number(snapshot.emptyFaces);
+  out.number(snapshot.meshes.size());
+  for (const SnapshotMesh& mesh : snapshot.meshes) {
+    out.text(mesh.name);
+    out.values(mesh.positions);
+    out.values(mesh.normals);
+    out.values(mesh.uvs);
+    out.values(mesh.triangles);
+    out.number(mesh.points);
+    out.number(mesh.lines);
+  }
+  out.number(snapshot.nodes.size());
+  for (const SnapshotNode& node : snapshot.nodes) {
+    out.text(node.name);
+    out.bytes(node.transform.data(), sizeof(double) * 16);
+    out.values(node.meshes);
+    out.values(node.children);
+  }
+  out.number(snapshot.messages.size());
+  for (const AssimpMessage& message : snapshot.messages) {
+    out.number(message.severity == AssimpMessage::Severity::Error ? 1 : 0);
+    out.text(message.text);
+    out.number(message.repeats);
+  }
+  out.number(snapshot.unkeptMessages);
+  out.number(kMagic);
+  return out.flush();
+}
+
+AssimpSnapshot readAssimpSnapshot(int fd) {
+  Reader in(fd);
+  if (in.number() != kMagic) throw std::runtime_error("the answer does not start as one");
+  AssimpSnapshot snapshot;
+  snapshot.error = in.text();
+  snapshot.loaderVertices = in.number();
+  snapshot.loaderFaces = in.number();
+  snapshot.unusedVertices = in.number();
+  snapshot.emptyFaces = in.number();
+  for (std::uint64_t meshes = in.number(); meshes > 0; --meshes) {
+    SnapshotMesh& mesh = snapshot.meshes.emplace_back();
+    mesh.name = in.text();
+    mesh.positions = in.values<Vec3f>();
+    mesh.normals = in.values<Vec3f>();
+    mesh.uvs = in.values<Vec2f>();
+    mesh.triangles = in.values<Triangle>();
+    mesh.points = in.number();
+    mesh.lines = in.number();
+  }
+  for (std::uint64_t nodes = in.number(); nodes > 0; --nodes) {
+    SnapshotNode& node = snapshot.nodes.emplace_back();
+    node.name = in.text();
+    in.bytes(node.transform.data(), sizeof(double) * 16);
+    node.meshes = in.values<std::uint32_t>();
+    node.children = in.values<std::uint32_t>();
+  }
+  for (std::uint64_t messages = in.number(); messages > 0; --messages) {
+    AssimpMessage& message = snapshot.messages.emplace_back();
+    message.severity =
+        in.number() == 1 ? AssimpMessage::Severity::Error : AssimpMessage::Severity::Warning;
+    message.text = in.text();
+    message.repeats = std::size_t(in.number());
+  }
+  snapshot.unkeptMessages = std::size_t(in.number());
+  if (in.number() != kMagic) throw std::runtime_error("the answer does not end as one");
+  return snapshot;
+}
+
+AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postProcess,
+                                         const std::string& file) {
+  int pipe[2];
+  if (::pipe2(pipe, O_CLOEXEC) != 0)
+    throw Error(
+        cat(file, ": cannot start a process to read the file (", std::strerror(errno), ")"));
+  const pid_t child = ::fork();
+  if (child < 0) {
+    const int why = errno;
+    closeQuietly(pipe[0]);
+    closeQuietly(pipe[1]);
+    throw Error(cat(file, ": cannot start a process to read the file (", std::strerror(why), ")"));
+  }
+  if (child == 0) {
+    closeQuietly(pipe[0]);
+    // What a crash prints (a sanitizer's report, in checked builds) is assimp's business; the
+    // parent says what happened, naming the file.
+    const int devNull = ::open("/dev/null", O_WRONLY);
+    if (devNull >= 0) ::dup2(devNull, STDERR_FILENO);
+    AssimpSnapshot snapshot;
+    try {
+      snapshot = takeAssimpSnapshot(read, postProcess);
+    } catch (const std::bad_alloc&) {
+      snapshot = AssimpSnapshot();
+      snapshot.error = "ran out of memory";
+    } catch (const std::exception& e) {
+      snapshot = AssimpSnapshot();
+      snapshot.error = e.what();
+    }
+    // _exit: no atexit handlers, no flushing of stdio buffers the parent will flush itself.
+    ::_exit(writeAssimpSnapshot(pipe[1], snapshot) ? 0 : 3);
+  }
+  closeQuietly(pipe[1]);
+
+  AssimpSnapshot snapshot;
+  std::string broken;
+  bool outOfMemory = false;
+  try {
+    snapshot = readAssimpSnapshot(pipe[0]);
+  } catch (const std::bad_alloc&) {
+    outOfMemory = true;
+  } catch (const std::exception& e) {
+    broken = e.what();
+  }
+  // Closed before waiting: a child still writing then stops (on a broken pipe) instead of
+  // blocking on a pipe nobody reads.
+  closeQuietly(pipe[0]);
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (outOfMemory) throw std::bad_alloc();
+  if (WIFSIGNALED(status))
+    throw Error(cat(file, ": assimp crashed reading the file (", ::strsignal(WTERMSIG(status)),
+                    "): the file is corrupt, or trips a bug in assimp"));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw Error(cat(file, ": assimp crashed reading the file (its process ended with status ",
+                    WEXITSTATUS(status), "): the file is corrupt, or trips a bug in assimp"));
+  if (!broken.empty())
+    throw Error(
+        cat(file, ": the process reading the file sent back a broken answer (", broken, ")"));
+  return snapshot;
+}
+
+}  // namespace softbake
