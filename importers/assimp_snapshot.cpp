@@ -3,12 +3,14 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fcntl.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <assimp/Importer.hpp>
 
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <new>
 #include <stdexcept>
@@ -225,6 +227,27 @@ class Reader {
 // The first bytes of every answer: a child that died before writing them sent nothing.
 constexpr std::uint64_t kMagic = 0x736f667462616b65;  // "softbake"
 
+// In the child: a crash is the parent's to report, the same way in every build. A sanitizer's or
+// libFuzzer's handler would print a report, exit with status 1 instead of the signal, and
+// libFuzzer's would also save the input as a finding of its own, though the parent goes on. Both
+// refuse to let a program replace their handlers through sigaction(), so the kernel is asked
+// directly; its struct sigaction differs from libc's.
+void restoreDefaultCrashHandling() {
+  for (const int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) {
+#if defined(__linux__) && defined(__x86_64__)
+    struct {
+      void (*handler)(int);
+      unsigned long flags;
+      void (*restorer)();
+      unsigned long mask;
+    } action = {SIG_DFL, 0, nullptr, 0};
+    ::syscall(SYS_rt_sigaction, signal, &action, nullptr, sizeof action.mask);
+#else
+    std::signal(signal, SIG_DFL);
+#endif
+  }
+}
+
 void closeQuietly(int fd) {
   while (::close(fd) < 0 && errno == EINTR) {
   }
@@ -353,6 +376,7 @@ AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postPr
     // parent says what happened, naming the file.
     const int devNull = ::open("/dev/null", O_WRONLY);
     if (devNull >= 0) ::dup2(devNull, STDERR_FILENO);
+    restoreDefaultCrashHandling();
     AssimpSnapshot snapshot;
     try {
       snapshot = takeAssimpSnapshot(read, postProcess);

@@ -18,8 +18,10 @@ struct CellKey {
 
 struct CellKeyHash {
   std::size_t operator()(const CellKey& k) const {
-    return std::size_t(k.x * 73856093LL) ^ std::size_t(k.y * 19349663LL) ^
-           std::size_t(k.z * 83492791LL);
+    // Unsigned, where wrapping is defined: a cell far out has a large number (found by fuzzing:
+    // the signed products overflowed). The same hash values as before wherever they did not.
+    return std::size_t(k.x) * 73856093u ^ std::size_t(k.y) * 19349663u ^
+           std::size_t(k.z) * 83492791u;
   }
 };
 
@@ -48,10 +50,14 @@ WeldedMesh weldByPosition(std::span<const Vec3f> positions, std::span<const Tria
 
   // Cells of the tolerance's size: a vertex's twin lies in its own cell or one of the 26 around it.
   std::unordered_map<CellKey, std::vector<Index>, CellKeyHash> cells;
+  // Clamped: a mesh far smaller than its distance from the origin gave cell numbers past int64,
+  // undefined behaviour (found by fuzzing). Far cells then share one, which costs time, not
+  // correctness, and the numbers of every other mesh are as before.
+  auto cellIndex = [&](float coordinate) {
+    return std::int64_t(std::clamp(std::floor(double(coordinate) / tolerance), -0x1p62, 0x1p62));
+  };
   auto cellOf = [&](const Vec3f& p) {
-    return CellKey{std::int64_t(std::floor(double(p.x()) / tolerance)),
-                   std::int64_t(std::floor(double(p.y()) / tolerance)),
-                   std::int64_t(std::floor(double(p.z()) / tolerance))};
+    return CellKey{cellIndex(p.x()), cellIndex(p.y()), cellIndex(p.z())};
   };
   const float toleranceSquared = tolerance * tolerance;
   for (std::size_t i = 0; i < positions.size(); ++i) {

@@ -52,6 +52,18 @@ TEST(Weld, DropsDegenerateDuplicateAndUnreferenced) {
   EXPECT_EQ(welded.renderToParticle[24], kNoParticle);
 }
 
+// Found by fuzzing: with every vertex in one place the tolerance falls to its floor (1e-30), and
+// coordinates divided by it overflowed int64 in the cell numbers (undefined behaviour, which the
+// sanitizer build reports). They weld to one particle and the triangle is degenerate.
+TEST(Weld, VerticesAllInOnePlaceAwayFromTheOriginWeldToOneParticle) {
+  const std::vector<Vec3f> positions(3, Vec3f(-3.1e-9f, 5, 1e20f));
+  const std::vector<Triangle> triangles = {{0, 1, 2}};
+  const WeldedMesh welded = weldByPosition(positions, triangles);
+  EXPECT_EQ(welded.positions.size(), 0u);  // no triangle is left to use it
+  EXPECT_EQ(welded.degenerateTriangles, 1u);
+  EXPECT_EQ(welded.renderToParticle, std::vector<Index>(3, kNoParticle));
+}
+
 TEST(Weld, MatchesBruteForceOnANoisyCloud) {
   // Reference: O(n²) union of points within the tolerance of an earlier representative.
   std::mt19937 random(7);
