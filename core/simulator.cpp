@@ -146,14 +146,19 @@ void Simulator::reportBlowUp(int frame) const {
   const Index particle = findRunawayParticle(topology, state_);
   const Body& body = topology.bodies[particle == kNoParticle ? 0 : topology.particleBody[particle]];
   const Vec3& v = state_.velocity[particle == kNoParticle ? 0 : particle];
-  throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
-                  particle - body.firstParticle, " reached speed ",
-                  v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
-                  topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
-                  substeps_.stableAtAnyStep
-                      ? std::string()
-                      : cat(", stable from ", substeps_.minimumStableSubsteps),
-                  ") or a lower stiffness"));
+  const Vec3& x = state_.position[particle == kNoParticle ? 0 : particle];
+  // A position that is not finite at a bounded speed came from a stage after the integrator.
+  const std::string what =
+      !x.allFinite() && v.allFinite() && v.norm() <= topology.settings.maxSpeed
+          ? std::string(" was moved to a position that is not finite")
+          : cat(" reached speed ", v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"),
+                " (limit ", topology.settings.maxSpeed, ")");
+  throw Error(
+      cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
+          particle - body.firstParticle, what, ". Use more substeps (now ", substeps_.substeps,
+          substeps_.stableAtAnyStep ? std::string()
+                                    : cat(", stable from ", substeps_.minimumStableSubsteps),
+          ") or a lower stiffness"));
 }
 
 }  // namespace softbake

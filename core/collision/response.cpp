@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -112,7 +113,8 @@ Vec3 pointOn(const ResponseScene& scene, const StruckPoint& struck) {
 }
 
 /// The point of the line where the planes (n1, p1) and (n2, p2) meet that is closest to `x`.
-/// The normals are unit and at least 30° apart (kCornerCosine), so the system is well posed.
+/// The normals are unit and between 30° and 150° apart (kCornerCosine), so the system is well
+/// posed.
 Vec3 closestPointOnPlaneIntersection(const Vec3& n1, const Vec3& p1, const Vec3& n2, const Vec3& p2,
                                      const Vec3& x) {
   const Vec3d a = n1.cast<double>(), b = n2.cast<double>();
@@ -162,7 +164,7 @@ void respondToParticleContacts(const ResponseScene& scene, const std::vector<Par
     const ParticleContact& first = hits[begin];  // the earliest crossing: closest to the particle
     const ParticleContact* second = nullptr;
     for (std::size_t i = begin + 1; i < end && !second; ++i)
-      if (hits[i].normal.dot(first.normal) < kCornerCosine) second = &hits[i];
+      if (std::abs(hits[i].normal.dot(first.normal)) < kCornerCosine) second = &hits[i];
     begin = end;
 
     const Index surfaceB = geometry.triangleSurface[first.triangle];

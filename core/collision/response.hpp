@@ -49,9 +49,12 @@ struct CollisionResponseStats {
   std::size_t edgePushes = 0;         ///< edge ends pushed out of a closed surface
 };
 
-/// Two hits whose unit normals meet at more than this cosine's angle (30°) are two surfaces
-/// (case 2). Neighbouring triangles of a smooth mesh differ by less: an icosphere of level 3 by
-/// about 12°, so a particle through their shared edge stays case 1.
+/// Two hits whose unit normals meet at more than this cosine's angle (30°), and less than its
+/// supplement (150°), are two surfaces meeting in a corner (case 2). Neighbouring triangles of a
+/// smooth mesh differ by less: an icosphere of level 3 by about 12°, so a particle through their
+/// shared edge stays case 1. Nearly opposite faces are no corner but the two sides of a gap (a
+/// ball squashed flat under a load, its top face over its bottom one): their planes meet, if at
+/// all, far away, and the corner point between them was not finite. The earliest hit answers.
 constexpr Scalar kCornerCosine = Scalar(0.8660254);
 
 /// An edge end is pushed out of a face by at most this fraction of the edge's length per
