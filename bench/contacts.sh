@@ -24,7 +24,10 @@ for name in sheet_ball mixed_pile heavy_on_jelly glued_assembly flag_fold fig7_1
 done
 "$cases" "$root/examples/glued_assembly.json" implicit ignore |
   sed 's/^| glued_assembly /| glued_assembly (ignore) /'
-# Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) up to 10:1:
-# the most intersecting pairs between them at a frame's end, or the frame the run blew up at.
+# 64 balls of every preset at 1:10 onto a static sphere (bench/scenes/make_pile64.py).
+"$cases" "$root/bench/scenes/pile64.json" implicit
+# Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) from 1:100 to
+# 100:1: the most intersecting pairs between them at a frame's end and the most energy above the
+# start, or the frame the run blew up at.
 echo
 "$build/bench/contact_sweep"

@@ -143,8 +143,8 @@ void describeInitialOverlaps(const Simulator& simulator) {
   const bool ignore = topology.settings.collisions.initialOverlap == InitialOverlapMode::Ignore;
   std::printf("warning: surfaces intersect at the start: %s; %s\n", list.c_str(),
               ignore ? "those surfaces never collide with each other (initial_overlap \"ignore\")"
-                     : "they are pushed apart over the first frames (initial_overlap "
-                       "\"separate\"; \"ignore\" glues them)");
+                     : "they are taken apart over the first frames, two bodies moved as wholes "
+                       "without velocity (initial_overlap \"separate\"; \"ignore\" glues them)");
 }
 
 /// The scene's size, its substeps and its collision setup, on stdout.

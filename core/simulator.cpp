@@ -30,14 +30,15 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
   // Detection only (response "none", the paper's figure 5b) lets bodies pass into each other.
   const CollisionSettings& collisions = topology_->settings.collisions;
-  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None) {
-    failsafe_.emplace(*topology_);
-    if (collisions.initialOverlap == InitialOverlapMode::Separate)
-      failsafe_->leaveTangled(initialOverlaps_);
-  }
   initialOverlaps_ = findInitialOverlaps(*topology_, state_.position);
-  if (topology_->settings.collisions.initialOverlap == InitialOverlapMode::Ignore)
+  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
+    failsafe_.emplace(*topology_);
+  if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
+  } else if (collides_ && collisions.response != ResponseMode::None && !initialOverlaps_.empty()) {
+    detangler_.emplace(*topology_);
+    nameTangledSurfaces(initialOverlaps_);
+  }
   const IntegratorKind integrator = topology_->settings.integrator;
   if (integrator == IntegratorKind::Implicit) {
     implicit_.emplace(*topology_);
@@ -104,8 +105,13 @@ void Simulator::step(int frame) {
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
     detector_.detect(topology, {substepStart_, state_.position}, &clock);
+    std::span<const std::pair<Index, Index>> tangled;
+    if (detangler_ && detangler_->any()) {
+      stats_.detangledBodies += detangler_->apply(topology, detector_, state_, dt);
+      tangled = detangler_->pairs();
+    }
     const CollisionResponseStats responses =
-        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_);
+        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_, tangled);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
@@ -130,10 +136,16 @@ void Simulator::step(int frame) {
 
 void Simulator::beginFrame() {
   stats_ = {};
-  // Surfaces still tangled are left to the response until a frame finds them apart.
-  if (failsafe_ && failsafe_->anyTangled())
-    failsafe_->leaveTangled(findInitialOverlaps(*topology_, state_.position));
+  // Surfaces still tangled are left to the detangler and the response until a frame finds them
+  // apart.
+  if ((failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any()))
+    nameTangledSurfaces(findInitialOverlaps(*topology_, state_.position));
   if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
+}
+
+void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
+  if (failsafe_) failsafe_->leaveTangled(overlaps);
+  if (detangler_) detangler_->setTangled(*topology_, overlaps);
 }
 
 void Simulator::advanceToFrame(int frame) {

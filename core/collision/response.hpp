@@ -31,6 +31,8 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "core/collision/contact.hpp"
@@ -98,11 +100,28 @@ class EdgePushes {
   std::vector<std::uint32_t> count_;  ///< pushes per particle
 };
 
+/// The ends of an edge contact's edge that lie inside the closed surface it passes through:
+/// behind the struck face's plane, and near the face (within its longest side: a long edge, a big
+/// static triangle under a small body, crosses the face with its ends behind its plane but far
+/// outside the body).
+struct EdgeEndsInside {
+  std::array<Index, 2> end{};
+  std::array<Scalar, 2> depth{};  ///< how far behind the face's plane, > 0
+  int count = 0;
+  Vec3 normal = Vec3::Zero();     ///< the struck face's unit normal, out of its surface
+  Vec3 facePoint = Vec3::Zero();  ///< where the edge passes through the face
+};
+/// Empty when the struck surface is open (no inside).
+EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
+                                  std::span<const Vec3> positions, const EdgeContact& edge);
+
 /// Writes this substep's contacts to `contacts` (replacing what was there) and, unless `mode` is
-/// ResponseMode::None, moves the particles and sets their velocities as described above.
-CollisionResponseStats respondToCollisions(const SceneTopology& topology,
-                                           const CollisionDetector& detector, ResponseMode mode,
-                                           SimulationState& state, std::vector<Contact>& contacts,
-                                           EdgePushes& edgePushes);
+/// ResponseMode::None, moves the particles and sets their velocities as described above. Contacts
+/// between the surface pairs of `leaveAlone` (sorted, lower surface first) are recorded but not
+/// responded to: surfaces that start inside each other, which the Detangler takes apart.
+CollisionResponseStats respondToCollisions(
+    const SceneTopology& topology, const CollisionDetector& detector, ResponseMode mode,
+    SimulationState& state, std::vector<Contact>& contacts, EdgePushes& edgePushes,
+    std::span<const std::pair<Index, Index>> leaveAlone = {});
 
 }  // namespace softbake
