@@ -94,7 +94,7 @@ void Simulator::step(int frame) {
       std::copy(substepStart_.begin(), substepStart_.end(), state_.position.begin());
       std::copy(velocityStart_.begin(), velocityStart_.end(), state_.velocity.begin());
       holds_->holdFor(*implicit_, state_, dt);
-      finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
+      finite = implicit_->stepAgain(topology, dt, state_, substepStart_);
     }
   } else {
     finite = xpbd_ ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
