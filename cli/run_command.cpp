@@ -159,12 +159,14 @@ void describeRun(const std::string& name, const Simulator& simulator) {
   describeSubsteps(simulator.substeps(), simulator.topology().settings.integrator);
   const CollisionSettings& collisions = topology.settings.collisions;
   if (simulator.collides())
-    std::printf("collisions: %s broad phase%s, %s response\n",
+    std::printf("collisions: %s broad phase%s, %s\n",
                 std::string(broadPhaseName(collisions.broadPhase)).c_str(),
                 collisions.broadPhase == BroadPhaseKind::Sbhash
                     ? cat(" (level ", collisions.subdivisionLevels, ")").c_str()
                     : "",
-                std::string(responseModeName(collisions.response)).c_str());
+                collisions.response == ResponseMode::None
+                    ? "detection only (response \"none\")"
+                    : cat(responseModeName(collisions.response), " response").c_str());
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
   describeInitialOverlaps(simulator);
