@@ -8,10 +8,9 @@
 #include <string>
 
 #include "core/dynamics/energy.hpp"
-#include "core/dynamics/material.hpp"
 #include "core/error.hpp"
-#include "core/mesh/icosphere.hpp"
 #include "core/simulator.hpp"
+#include "tests/support/dropped_pair.hpp"
 #include "tests/support/intersection_checker.hpp"
 
 using namespace softbake;
@@ -20,22 +19,7 @@ namespace {
 constexpr int kFrames = 72;
 
 std::string run(const char* lower, const char* upper, float ratio) {
-  SceneSetup scene;
-  scene.name = "sweep";
-  scene.settings.frames = kFrames;
-  BodySetup bottom;
-  bottom.name = "lower";
-  bottom.mesh = makeIcosphere(3, 0.4f, Vec3f(0, 5.0f, 0));
-  bottom.material = *findMaterialPreset(lower);
-  bottom.mass = 1;
-  BodySetup top = bottom;
-  top.name = "upper";
-  top.mesh = makeIcosphere(3, 0.4f, Vec3f(0.05f, 6.0f, 0.03f));
-  top.material = *findMaterialPreset(upper);
-  top.mass = ratio;
-  scene.bodies = {bottom, top};
-  scene.planes.push_back(PlaneCollider{});
-  Simulator simulator(buildSceneTopology(scene));
+  Simulator simulator(buildSceneTopology(test::droppedPair(lower, upper, ratio, kFrames)));
   const double start = computeEnergy(simulator.topology(), simulator.state()).total();
   double rise = 0;
   std::size_t worst = 0;

@@ -13,6 +13,7 @@
 #include "core/mesh/icosphere.hpp"
 #include "core/simulator.hpp"
 #include "importers/scene_file.hpp"
+#include "tests/support/dropped_pair.hpp"
 #include "tests/support/intersection_checker.hpp"
 
 namespace softbake {
@@ -187,20 +188,7 @@ class HeavyOnLight : public ::testing::TestWithParam<std::tuple<std::string, std
 
 TEST_P(HeavyOnLight, LandsOnTheGroundWithoutIntersecting) {
   const auto& [lower, upper] = GetParam();
-  SceneSetup scene;
-  scene.settings.frames = 48;
-  BodySetup bottom;
-  bottom.name = "lower";
-  bottom.mesh = makeIcosphere(3, 0.4f, Vec3f(0, 5.0f, 0));
-  bottom.material = *findMaterialPreset(lower);
-  bottom.mass = 1;
-  BodySetup top = bottom;
-  top.name = "upper";
-  top.mesh = makeIcosphere(3, 0.4f, Vec3f(0.05f, 6.0f, 0.03f));
-  top.material = *findMaterialPreset(upper);
-  top.mass = 10;
-  scene.bodies = {bottom, top};
-  scene.planes.push_back(PlaneCollider{});
+  const SceneSetup scene = test::droppedPair(lower, upper, 10, 48);
   Simulator simulator(buildSceneTopology(scene));
   const double start = computeEnergy(simulator.topology(), simulator.state()).total();
   std::size_t planeContacts = 0;
