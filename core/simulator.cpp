@@ -108,7 +108,7 @@ void Simulator::step(int frame) {
     std::span<const std::pair<Index, Index>> tangled;
     if (detangler_ && detangler_->any()) {
       stats_.detangledBodies += detangler_->apply(topology, detector_, state_, dt);
-      tangled = detangler_->pairs();
+      tangled = detangler_->movedPairs();
     }
     const CollisionResponseStats responses =
         respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_, tangled);

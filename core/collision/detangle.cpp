@@ -23,6 +23,7 @@ Detangler::Detangler(const SceneTopology& topology)
 
 void Detangler::setTangled(const SceneTopology& topology, const InitialOverlaps& overlaps) {
   pairs_.clear();
+  moved_.clear();
   for (const SurfaceOverlap& overlap : overlaps.bySurfaces) {
     const Index a = overlap.firstSurface, b = overlap.secondSurface;
     if (a == b || !(movable_[a] || movable_[b])) continue;
@@ -32,6 +33,7 @@ void Detangler::setTangled(const SceneTopology& topology, const InitialOverlaps&
   std::sort(pairs_.begin(), pairs_.end());
   direction_.assign(pairs_.size(), Vec3d::Zero());
   depth_.assign(pairs_.size(), 0);
+  moved_.reserve(pairs_.size());
 }
 
 std::size_t Detangler::apply(const SceneTopology& topology, const CollisionDetector& detector,
@@ -57,11 +59,13 @@ std::size_t Detangler::apply(const SceneTopology& topology, const CollisionDetec
   }
 
   std::fill(translation_.begin(), translation_.end(), Vec3d::Zero());
+  moved_.clear();
   const double reach = double(kDetangleSpeed) * double(dt);
   for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const double length = direction_[k].norm();
     if (!(length > 0)) continue;
     const auto [first, second] = pairs_[k];
+    moved_.push_back(pairs_[k]);
     const Vec3d move =
         std::min(double(depth_[k] + topology.settings.skin), reach) * (direction_[k] / length);
     const double firstMass = movable_[first] ? double(topology.bodies[first].mass) : 0.0;

@@ -16,8 +16,9 @@
 /// body with pins does not move; its partner takes the whole move), by at most kDetangleSpeed·dt
 /// a substep, and their velocities are left alone. A translation stores nothing in the springs,
 /// so no velocity spike: the pair comes apart over the first frames and then rests in contact.
-/// The response and the failsafe leave the pair alone meanwhile; the simulator names the pairs
-/// still tangled at every frame's start (findInitialOverlaps).
+/// The response leaves a pair alone in every substep that moves it, and the failsafe until a frame
+/// starts with the pair apart: the simulator names the pairs still tangled at every frame's start
+/// (findInitialOverlaps).
 ///
 /// A body tangled with itself cannot be moved apart from itself: the response separates it, as
 /// before. So does it a pair of which neither side can move, or whose faces are open (no
@@ -47,9 +48,13 @@ class Detangler {
   /// The pairs of `overlaps` between two different surfaces of which at least one can move: the
   /// ones this stage takes apart. Replaces the previous list.
   void setTangled(const SceneTopology& topology, const InitialOverlaps& overlaps);
-  /// Sorted, lower surface first: what the response and the failsafe leave alone.
+  /// Sorted, lower surface first.
   std::span<const std::pair<Index, Index>> pairs() const { return pairs_; }
   bool any() const { return !pairs_.empty(); }
+  /// The pairs the latest apply() moved apart, sorted: what the response leaves alone. A tangled
+  /// pair without an edge end inside the other (nothing says which way out) is left to the
+  /// response, as before this stage.
+  std::span<const std::pair<Index, Index>> movedPairs() const { return moved_; }
 
   /// After detection, before the response: moves the tangled bodies apart (positions only).
   /// Returns how many bodies it moved.
@@ -58,6 +63,7 @@ class Detangler {
 
  private:
   std::vector<std::pair<Index, Index>> pairs_;
+  std::vector<std::pair<Index, Index>> moved_;
   std::vector<char> movable_;       ///< per surface: a body without pins
   std::vector<Vec3d> direction_;    ///< per pair: Σ outward normals, first surface's way out
   std::vector<Scalar> depth_;       ///< per pair: the deepest end inside
