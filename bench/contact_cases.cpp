@@ -5,6 +5,11 @@
 // from them.
 //
 //   contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] [failsafe|nofailsafe]
+//                 [--csv=FILE]
+//
+// --csv=FILE appends one row per frame to FILE (scene, variant, frame, intersecting pairs between
+// bodies and within one, contacts per substep, energy above the start in J), with a header when
+// FILE is new: what bench/plot_bench.py contacts draws.
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -27,6 +32,18 @@ int main(int argc, char** argv) {
                  "[failsafe|nofailsafe]\n");
     return 1;
   }
+  std::FILE* csv = nullptr;
+  if (argc > 2 && std::strncmp(argv[argc - 1], "--csv=", 6) == 0) {
+    const char* path = argv[--argc] + 6;
+    const bool fresh = !std::filesystem::exists(path);
+    csv = std::fopen(path, "a");
+    if (!csv) {
+      std::fprintf(stderr, "contact_cases: cannot write %s\n", path);
+      return 1;
+    }
+    if (fresh)
+      std::fprintf(csv, "scene,variant,frame,between,within,contacts_per_substep,energy_above\n");
+  }
   try {
     SceneFile file = loadSceneFile(argv[1]);
     SimulationSettings& settings = file.setup.settings;
@@ -35,6 +52,8 @@ int main(int argc, char** argv) {
     if (argc > 3 && !parseInitialOverlapMode(argv[3], settings.collisions.initialOverlap))
       throw Error(std::string("unknown initial_overlap ") + argv[3]);
     if (argc > 4) settings.collisions.failsafe = std::strcmp(argv[4], "nofailsafe") != 0;
+    const std::string variant = std::string(integratorName(settings.integrator)) +
+                                (settings.collisions.failsafe ? "" : ", no failsafe");
     Simulator simulator(buildSceneTopology(file.setup));
     simulator.measureStages(true);
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
@@ -70,8 +89,17 @@ int main(int argc, char** argv) {
       worstWithin = std::max(worstWithin, count.withinSurfaces);
       framesBetween += count.betweenSurfaces > 0;
       framesWithin += count.withinSurfaces > 0;
-      highest = std::max(highest, computeEnergy(simulator.topology(), simulator.state()).total());
+      const double energy = computeEnergy(simulator.topology(), simulator.state()).total();
+      highest = std::max(highest, energy);
+      if (csv)
+        std::fprintf(
+            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f\n",
+            std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(), frame,
+            count.betweenSurfaces, count.withinSurfaces,
+            double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
+            energy - start);
     }
+    if (csv) std::fclose(csv);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count() -
         checkSeconds;
@@ -80,10 +108,7 @@ int main(int argc, char** argv) {
     std::printf(
         "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
         "%.1f |\n",
-        std::filesystem::path(argv[1]).stem().string().c_str(),
-        (std::string(integratorName(settings.integrator)) +
-         (settings.collisions.failsafe ? "" : ", no failsafe"))
-            .c_str(),
+        std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(),
         simulator.topology().bodies.size(), triangles,
         failure.empty() ? std::to_string(reached).c_str()
                         : ("blew up at " + std::to_string(reached + 1)).c_str(),

@@ -16,15 +16,22 @@ cases=$build/bench/contact_cases  # and contact_sweep beside it
 
 printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s |\n'
 printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|\n'
+# Per frame, the implicit runs with and without the failsafe, for the chart.
+frames=$root/bench/results/contacts_frames.csv
+rm -f "$frames"
 for name in sheet_ball mixed_pile heavy_on_jelly glued_assembly flag_fold fig7_10k_faces; do
   scene=$root/examples/$name.json
-  "$cases" "$scene" implicit
+  "$cases" "$scene" implicit separate failsafe "--csv=$frames"
   "$cases" "$scene" explicit
-  "$cases" "$scene" implicit separate nofailsafe
+  "$cases" "$scene" implicit separate nofailsafe "--csv=$frames"
 done
+python3 "$root/bench/plot_bench.py" contacts "$frames" "$root/bench/results/contacts.svg" >&2
 "$cases" "$root/examples/glued_assembly.json" implicit ignore |
   sed 's/^| glued_assembly /| glued_assembly (ignore) /'
-# Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) up to 10:1:
-# the most intersecting pairs between them at a frame's end, or the frame the run blew up at.
+# 64 balls of every preset at 1:10 onto a static sphere (bench/scenes/make_pile64.py).
+"$cases" "$root/bench/scenes/pile64.json" implicit
+# Two balls of every pair of presets dropped from 5 m at mass ratios (upper:lower) from 1:100 to
+# 100:1: the most intersecting pairs between them at a frame's end and the most energy above the
+# start, or the frame the run blew up at.
 echo
 "$build/bench/contact_sweep"

@@ -6,7 +6,11 @@
   plot_bench.py scaling RESULTS.csv OUT.svg   steps/s and time per face-step against faces,
                                               log-log, one line per broad phase (and the peer)
 
-STEPS.csv is what `softbake bench --csv` writes; RESULTS.csv has the columns
+  plot_bench.py contacts FRAMES.csv OUT.svg   intersecting triangle pairs between bodies per
+                                              frame without the failsafe, and contacts per
+                                              substep with it, one line per scene
+
+STEPS.csv is what `softbake bench --csv` writes; FRAMES.csv what `contact_cases --csv=` writes; RESULTS.csv has the columns
 scene,faces,broadphase,threads,steps_per_s,peak_rss_mb (bench/scaling.sh writes it).
 """
 import csv
@@ -180,8 +184,36 @@ def scaling(rows):
     return panels
 
 
+def contacts(rows):
+    # With the failsafe, pairs count once a scene is apart: a scene that starts tangled
+    # (glued_assembly) has pairs on its first frames by construction.
+    pairs, load, worst_with, apart = OrderedDict(), OrderedDict(), 0, set()
+    for r in rows:
+        frame, scene = int(r["frame"]), r["scene"]
+        if r["variant"].endswith("no failsafe"):
+            pairs.setdefault(scene, ([], []))
+            pairs[scene][0].append(frame)
+            pairs[scene][1].append(int(r["between"]))
+        else:
+            if int(r["between"]) == 0:
+                apart.add(scene)
+            if scene in apart:
+                worst_with = max(worst_with, int(r["between"]))
+            load.setdefault(scene, ([], []))
+            load[scene][0].append(frame)
+            load[scene][1].append(float(r["contacts_per_substep"]))
+    return [
+        {"title": f"Pairs between bodies without the failsafe (with it: {worst_with})",
+         "xlabel": "frame", "ylabel": "intersecting triangle pairs", "legend": "top-right",
+         "series": [(scene, xs, ys) for scene, (xs, ys) in pairs.items()]},
+        {"title": "Contacts per substep, with the failsafe", "xlabel": "frame",
+         "ylabel": "contacts / substep", "legend": "top-right",
+         "series": [(scene, xs, ys) for scene, (xs, ys) in load.items()]},
+    ]
+
+
 def main(argv):
-    if len(argv) != 4 or argv[1] not in ("fig7_8", "scaling"):
+    if len(argv) != 4 or argv[1] not in ("fig7_8", "scaling", "contacts"):
         sys.exit(__doc__)
     with open(argv[2], newline="") as f:
         rows = list(csv.DictReader(row for row in f if not row.startswith("#")))
@@ -190,6 +222,10 @@ def main(argv):
     if argv[1] == "fig7_8":
         panels = fig7_8(rows)
         caption = f"softbake bench, {argv[2]}: 50-step moving averages"
+    elif argv[1] == "contacts":
+        panels = contacts(rows)
+        caption = (f"bench/contact_cases, {argv[2]}: the tests' exact checker at the end of every "
+                   "frame, implicit integrator")
     else:
         panels = scaling(rows)
         caption = f"softbake bench and bullet_peer_bench, {argv[2]}"

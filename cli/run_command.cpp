@@ -143,8 +143,8 @@ void describeInitialOverlaps(const Simulator& simulator) {
   const bool ignore = topology.settings.collisions.initialOverlap == InitialOverlapMode::Ignore;
   std::printf("warning: surfaces intersect at the start: %s; %s\n", list.c_str(),
               ignore ? "those surfaces never collide with each other (initial_overlap \"ignore\")"
-                     : "they are pushed apart over the first frames (initial_overlap "
-                       "\"separate\"; \"ignore\" glues them)");
+                     : "they are taken apart over the first frames, two bodies moved as wholes "
+                       "without velocity (initial_overlap \"separate\"; \"ignore\" glues them)");
 }
 
 /// The scene's size, its substeps and its collision setup, on stdout.
@@ -159,12 +159,14 @@ void describeRun(const std::string& name, const Simulator& simulator) {
   describeSubsteps(simulator.substeps(), simulator.topology().settings.integrator);
   const CollisionSettings& collisions = topology.settings.collisions;
   if (simulator.collides())
-    std::printf("collisions: %s broad phase%s, %s response\n",
+    std::printf("collisions: %s broad phase%s, %s\n",
                 std::string(broadPhaseName(collisions.broadPhase)).c_str(),
                 collisions.broadPhase == BroadPhaseKind::Sbhash
                     ? cat(" (level ", collisions.subdivisionLevels, ")").c_str()
                     : "",
-                std::string(responseModeName(collisions.response)).c_str());
+                collisions.response == ResponseMode::None
+                    ? "detection only (response \"none\")"
+                    : cat(responseModeName(collisions.response), " response").c_str());
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
   describeInitialOverlaps(simulator);

@@ -30,14 +30,15 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
   // Detection only (response "none", the paper's figure 5b) lets bodies pass into each other.
   const CollisionSettings& collisions = topology_->settings.collisions;
-  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None) {
-    failsafe_.emplace(*topology_);
-    if (collisions.initialOverlap == InitialOverlapMode::Separate)
-      failsafe_->leaveTangled(initialOverlaps_);
-  }
   initialOverlaps_ = findInitialOverlaps(*topology_, state_.position);
-  if (topology_->settings.collisions.initialOverlap == InitialOverlapMode::Ignore)
+  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
+    failsafe_.emplace(*topology_);
+  if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
+  } else if (collides_ && collisions.response != ResponseMode::None && !initialOverlaps_.empty()) {
+    detangler_.emplace(*topology_);
+    nameTangledSurfaces(initialOverlaps_);
+  }
   const IntegratorKind integrator = topology_->settings.integrator;
   if (integrator == IntegratorKind::Implicit) {
     implicit_.emplace(*topology_);
@@ -93,7 +94,7 @@ void Simulator::step(int frame) {
       std::copy(substepStart_.begin(), substepStart_.end(), state_.position.begin());
       std::copy(velocityStart_.begin(), velocityStart_.end(), state_.velocity.begin());
       holds_->holdFor(*implicit_, state_, dt);
-      finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
+      finite = implicit_->stepAgain(topology, dt, state_, substepStart_);
     }
   } else {
     finite = xpbd_ ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
@@ -104,8 +105,13 @@ void Simulator::step(int frame) {
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
     detector_.detect(topology, {substepStart_, state_.position}, &clock);
+    std::span<const std::pair<Index, Index>> tangled;
+    if (detangler_ && detangler_->any()) {
+      stats_.detangledBodies += detangler_->apply(topology, detector_, state_, dt);
+      tangled = detangler_->movedPairs();
+    }
     const CollisionResponseStats responses =
-        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_);
+        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_, tangled);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
@@ -130,10 +136,16 @@ void Simulator::step(int frame) {
 
 void Simulator::beginFrame() {
   stats_ = {};
-  // Surfaces still tangled are left to the response until a frame finds them apart.
-  if (failsafe_ && failsafe_->anyTangled())
-    failsafe_->leaveTangled(findInitialOverlaps(*topology_, state_.position));
+  // Surfaces still tangled are left to the detangler and the response until a frame finds them
+  // apart.
+  if ((failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any()))
+    nameTangledSurfaces(findInitialOverlaps(*topology_, state_.position));
   if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
+}
+
+void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
+  if (failsafe_) failsafe_->leaveTangled(overlaps);
+  if (detangler_) detangler_->setTangled(*topology_, overlaps);
 }
 
 void Simulator::advanceToFrame(int frame) {
@@ -146,14 +158,19 @@ void Simulator::reportBlowUp(int frame) const {
   const Index particle = findRunawayParticle(topology, state_);
   const Body& body = topology.bodies[particle == kNoParticle ? 0 : topology.particleBody[particle]];
   const Vec3& v = state_.velocity[particle == kNoParticle ? 0 : particle];
-  throw Error(cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
-                  particle - body.firstParticle, " reached speed ",
-                  v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"), " (limit ",
-                  topology.settings.maxSpeed, "). Use more substeps (now ", substeps_.substeps,
-                  substeps_.stableAtAnyStep
-                      ? std::string()
-                      : cat(", stable from ", substeps_.minimumStableSubsteps),
-                  ") or a lower stiffness"));
+  const Vec3& x = state_.position[particle == kNoParticle ? 0 : particle];
+  // A position that is not finite at a bounded speed came from a stage after the integrator.
+  const std::string what =
+      !x.allFinite() && v.allFinite() && v.norm() <= topology.settings.maxSpeed
+          ? std::string(" was moved to a position that is not finite")
+          : cat(" reached speed ", v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"),
+                " (limit ", topology.settings.maxSpeed, ")");
+  throw Error(
+      cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
+          particle - body.firstParticle, what, ". Use more substeps (now ", substeps_.substeps,
+          substeps_.stableAtAnyStep ? std::string()
+                                    : cat(", stable from ", substeps_.minimumStableSubsteps),
+          ") or a lower stiffness"));
 }
 
 }  // namespace softbake

@@ -2,7 +2,8 @@
 /// Advances a SimulationState frame by frame over a shared, immutable SceneTopology: the fixed
 /// sequence of stages of one substep.
 ///
-///   forces (springs, volume, pressure) → integrate → collisions → planes → failsafe
+///   forces (springs, volume, pressure) → integrate → collisions (detection, detangling,
+///   response) → planes → failsafe
 ///
 /// The integrator is the paper's explicit Euler (§1.2), backward Euler or XPBD
 /// (settings.integrator); the collision stages after it are the same for all three.
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "core/collision/contact.hpp"
+#include "core/collision/detangle.hpp"
 #include "core/collision/detection.hpp"
 #include "core/collision/failsafe.hpp"
 #include "core/collision/initial_overlap.hpp"
@@ -40,6 +42,7 @@ struct StepStats {
   std::size_t contacts = 0;          ///< soft and static mesh contacts, summed over the substeps
   CollisionResponseStats responses;  ///< summed over the substeps
   FailsafeStats failsafe;            ///< summed over the substeps
+  std::size_t detangledBodies = 0;   ///< bodies the Detangler moved, summed over the substeps
 };
 
 class Simulator {
@@ -94,6 +97,8 @@ class Simulator {
 
  private:
   [[noreturn]] void reportBlowUp(int frame) const;
+  /// Tells the failsafe and the detangler which surfaces intersect where this frame starts.
+  void nameTangledSurfaces(const InitialOverlaps& overlaps);
   void chooseContactAccuracySubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
@@ -109,6 +114,8 @@ class Simulator {
   StepStats stats_;
   CollisionDetector detector_;
   std::optional<CollisionFailsafe> failsafe_;  ///< set when settings.collisions.failsafe is on
+  /// Set when bodies start inside each other under initial_overlap "separate".
+  std::optional<Detangler> detangler_;
   InitialOverlaps initialOverlaps_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;

@@ -29,8 +29,9 @@
 ///
 /// Surfaces that intersect each other are not held apart: holding them would hold them in their
 /// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
-/// while any are left, and the paper's response separates them (initial_overlap "separate", over
-/// the first frames); from the frame they are found apart, this stage holds them apart. A meeting
+/// while any are left, and the detangler (core/collision/detangle.hpp) or the paper's response
+/// separates them (initial_overlap "separate", over the first frames); from the frame they are
+/// found apart, this stage holds them apart. A meeting
 /// whose own triangles intersected at its start is left alone too, and surfaces ignored under
 /// "ignore" never meet. Otherwise the same pairs as the detector's, the same eligibility
 /// (self-collision only for surfaces that have it on).

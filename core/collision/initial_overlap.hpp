@@ -8,9 +8,11 @@
 /// when some edge of one passes through the other.
 ///
 /// What happens to them is `settings.collisions.initial_overlap`:
-/// - "separate" (the default): the collision stage resolves them like any other contact, the edge
-///   pushes moving a capped fraction of an edge per substep, so they come apart over the first
-///   frames;
+/// - "separate" (the default): two different bodies are moved apart as wholes, without velocity,
+///   over the first frames (core/collision/detangle.hpp), the response and the failsafe leaving
+///   them alone meanwhile; a body that crosses itself is resolved by the response like any other
+///   contact, the edge pushes moving a capped fraction of an edge per substep, so it comes apart
+///   over the first frames;
 /// - "ignore": two surfaces that intersect at the start never collide with each other (parts
 ///   meant to stay glued; a body that crosses itself stops colliding with itself). Every other
 ///   pair of surfaces still does. Ignoring only the triangle pairs that intersect was tried: the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -18,8 +19,19 @@ struct ResponseScene {
   const CollisionGeometry& geometry = topology.collision;
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
+  std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
+  bool leftAlone(Index surfaceA, Index surfaceB) const {
+    return !leaveAlone.empty() && std::binary_search(leaveAlone.begin(), leaveAlone.end(),
+                                                     std::pair(std::min(surfaceA, surfaceB),
+                                                               std::max(surfaceA, surfaceB)));
+  }
 };
+
+bool leftAlone(const ResponseScene& scene, const EdgeContact& edge) {
+  return scene.leftAlone(scene.geometry.triangleSurface[edge.edgeTriangle],
+                         scene.geometry.triangleSurface[edge.triangle]);
+}
 
 /// The surface side of a contact: up to two triangles' corners with their weights.
 struct StruckPoint {
@@ -104,15 +116,9 @@ bool correct(const ResponseScene& scene, Index p, const StruckPoint& struck, con
   return true;
 }
 
-/// Where the struck point is now: earlier responses of the substep may have moved its corners.
-Vec3 pointOn(const ResponseScene& scene, const StruckPoint& struck) {
-  Vec3 point = Vec3::Zero();
-  for (int i = 0; i < struck.count; ++i) point += struck.weight[i] * scene.vertex(struck.vertex[i]);
-  return point;
-}
-
 /// The point of the line where the planes (n1, p1) and (n2, p2) meet that is closest to `x`.
-/// The normals are unit and at least 30° apart (kCornerCosine), so the system is well posed.
+/// The normals are unit and between 30° and 150° apart (kCornerCosine), so the system is well
+/// posed.
 Vec3 closestPointOnPlaneIntersection(const Vec3& n1, const Vec3& p1, const Vec3& n2, const Vec3& p2,
                                      const Vec3& x) {
   const Vec3d a = n1.cast<double>(), b = n2.cast<double>();
@@ -162,7 +168,7 @@ void respondToParticleContacts(const ResponseScene& scene, const std::vector<Par
     const ParticleContact& first = hits[begin];  // the earliest crossing: closest to the particle
     const ParticleContact* second = nullptr;
     for (std::size_t i = begin + 1; i < end && !second; ++i)
-      if (hits[i].normal.dot(first.normal) < kCornerCosine) second = &hits[i];
+      if (std::abs(hits[i].normal.dot(first.normal)) < kCornerCosine) second = &hits[i];
     begin = end;
 
     const Index surfaceB = geometry.triangleSurface[first.triangle];
@@ -191,7 +197,7 @@ void respondToParticleContacts(const ResponseScene& scene, const std::vector<Par
     }
     target = contact.position + scene.skin * contact.normal;
     contacts.push_back(contact);
-    if (respond)
+    if (respond && !scene.leftAlone(contact.surfaceA, surfaceB))
       correct(scene, p, struck, target - scene.state.position[p], contact.normal,
               geometry.restitution[surfaceB], geometry.friction[surfaceB], mode);
   }
@@ -224,33 +230,24 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
   Correction correction;
   for (const EdgeContact& edge : edges) {
     const Index surfaceB = geometry.triangleSurface[edge.triangle];
-    if (!geometry.surfaceClosed[surfaceB]) continue;
-    // The end of the edge behind the face of a closed surface is inside it: back out through
-    // the face's plane, lifted by the skin. Depth is measured on the positions as the pass found
-    // them (after the particle responses and the earlier passes), so an end that an earlier pass
-    // pushed out is left alone.
-    const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
-    const Index ends[2] = {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]};
+    if (leftAlone(scene, edge)) continue;
+    // The end of the edge inside a closed surface: back out through the face's plane, lifted by
+    // the skin. Depth is measured on the positions as the pass found them (after the particle
+    // responses and the earlier passes), so an end that an earlier pass pushed out is left alone.
+    const EdgeEndsInside inside = findEdgeEndsInside(geometry, scene.state.position, edge);
+    if (inside.count == 0) continue;
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
-    const Vec3 normal = unitNormal(scene, edge.triangle);
-    const Vec3 facePoint = pointOn(scene, struck);
-    // Only an end near the face can be inside the body through it: a long edge (a big static
-    // triangle under a small body) crosses the face with its ends far outside the body, behind
-    // the face's plane but not behind the face. Near: within the face's longest side.
-    const Triangle& face = geometry.triangleVertices[edge.triangle];
-    Scalar faceSize = 0;
-    for (int k = 0; k < 3; ++k)
-      faceSize =
-          std::max(faceSize, (scene.vertex(face[(k + 1) % 3]) - scene.vertex(face[k])).norm());
-    const Scalar edgeLength = (scene.vertex(ends[1]) - scene.vertex(ends[0])).norm();
+    const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
+    const Scalar edgeLength =
+        (scene.vertex(edgeTriangle[(edge.edge + 1) % 3]) - scene.vertex(edgeTriangle[edge.edge]))
+            .norm();
     const Scalar maxPush = kMaxEdgePush * edgeLength;
-    for (Index end : ends) {
-      const Scalar depth = normal.dot(scene.vertex(end) - facePoint);
-      if (depth >= 0 || (scene.vertex(end) - facePoint).norm() > faceSize) continue;
-      if (!computeCorrection(scene, end, struck, std::min(scene.skin - depth, maxPush) * normal,
-                             normal, geometry.restitution[surfaceB], geometry.friction[surfaceB],
-                             mode, correction))
+    for (int k = 0; k < inside.count; ++k) {
+      if (!computeCorrection(scene, inside.end[k], struck,
+                             std::min(scene.skin + inside.depth[k], maxPush) * inside.normal,
+                             inside.normal, geometry.restitution[surfaceB],
+                             geometry.friction[surfaceB], mode, correction))
         continue;
       ++pushes;
       gathered.add(correction);
@@ -284,11 +281,34 @@ void EdgePushes::apply(SimulationState& state) {
   corrections_.clear();
 }
 
+EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
+                                  std::span<const Vec3> positions, const EdgeContact& edge) {
+  EdgeEndsInside inside;
+  if (!geometry.surfaceClosed[geometry.triangleSurface[edge.triangle]]) return inside;
+  const TriangleCorners face = geometry.corners(positions, edge.triangle);
+  inside.normal = (face[1] - face[0]).cross(face[2] - face[0]).normalized();
+  inside.facePoint = edge.hit.barycentric[0] * face[0] + edge.hit.barycentric[1] * face[1] +
+                     edge.hit.barycentric[2] * face[2];
+  Scalar faceSize = 0;
+  for (int k = 0; k < 3; ++k) faceSize = std::max(faceSize, (face[(k + 1) % 3] - face[k]).norm());
+  const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
+  for (Index end : {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]}) {
+    const Vec3 offset = geometry.vertex(positions, end) - inside.facePoint;
+    const Scalar depth = -inside.normal.dot(offset);
+    if (depth <= 0 || offset.norm() > faceSize) continue;
+    inside.end[inside.count] = end;
+    inside.depth[inside.count++] = depth;
+  }
+  return inside;
+}
+
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
-                                           EdgePushes& edgePushes) {
-  const ResponseScene scene{topology, state};
+                                           EdgePushes& edgePushes,
+                                           std::span<const std::pair<Index, Index>> leaveAlone) {
+  const ResponseScene scene{topology, state, topology.collision, topology.settings.skin,
+                            leaveAlone};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

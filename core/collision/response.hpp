@@ -31,6 +31,8 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "core/collision/contact.hpp"
@@ -49,9 +51,12 @@ struct CollisionResponseStats {
   std::size_t edgePushes = 0;         ///< edge ends pushed out of a closed surface
 };
 
-/// Two hits whose unit normals meet at more than this cosine's angle (30°) are two surfaces
-/// (case 2). Neighbouring triangles of a smooth mesh differ by less: an icosphere of level 3 by
-/// about 12°, so a particle through their shared edge stays case 1.
+/// Two hits whose unit normals meet at more than this cosine's angle (30°), and less than its
+/// supplement (150°), are two surfaces meeting in a corner (case 2). Neighbouring triangles of a
+/// smooth mesh differ by less: an icosphere of level 3 by about 12°, so a particle through their
+/// shared edge stays case 1. Nearly opposite faces are no corner but the two sides of a gap (a
+/// ball squashed flat under a load, its top face over its bottom one): their planes meet, if at
+/// all, far away, and the corner point between them was not finite. The earliest hit answers.
 constexpr Scalar kCornerCosine = Scalar(0.8660254);
 
 /// An edge end is pushed out of a face by at most this fraction of the edge's length per
@@ -95,11 +100,28 @@ class EdgePushes {
   std::vector<std::uint32_t> count_;  ///< pushes per particle
 };
 
+/// The ends of an edge contact's edge that lie inside the closed surface it passes through:
+/// behind the struck face's plane, and near the face (within its longest side: a long edge, a big
+/// static triangle under a small body, crosses the face with its ends behind its plane but far
+/// outside the body).
+struct EdgeEndsInside {
+  std::array<Index, 2> end{};
+  std::array<Scalar, 2> depth{};  ///< how far behind the face's plane, > 0
+  int count = 0;
+  Vec3 normal = Vec3::Zero();     ///< the struck face's unit normal, out of its surface
+  Vec3 facePoint = Vec3::Zero();  ///< where the edge passes through the face
+};
+/// Empty when the struck surface is open (no inside).
+EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
+                                  std::span<const Vec3> positions, const EdgeContact& edge);
+
 /// Writes this substep's contacts to `contacts` (replacing what was there) and, unless `mode` is
-/// ResponseMode::None, moves the particles and sets their velocities as described above.
-CollisionResponseStats respondToCollisions(const SceneTopology& topology,
-                                           const CollisionDetector& detector, ResponseMode mode,
-                                           SimulationState& state, std::vector<Contact>& contacts,
-                                           EdgePushes& edgePushes);
+/// ResponseMode::None, moves the particles and sets their velocities as described above. Contacts
+/// between the surface pairs of `leaveAlone` (sorted, lower surface first) are recorded but not
+/// responded to: surfaces that start inside each other, which the Detangler takes apart.
+CollisionResponseStats respondToCollisions(
+    const SceneTopology& topology, const CollisionDetector& detector, ResponseMode mode,
+    SimulationState& state, std::vector<Contact>& contacts, EdgePushes& edgePushes,
+    std::span<const std::pair<Index, Index>> leaveAlone = {});
 
 }  // namespace softbake

@@ -282,6 +282,11 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
 bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                          SimulationState& state, std::span<Vec3> substepStart) {
   assemble(topology, forces, dt, state);
+  return stepAgain(topology, dt, state, substepStart);
+}
+
+bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, SimulationState& state,
+                              std::span<Vec3> substepStart) {
   // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);

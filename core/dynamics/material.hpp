@@ -36,7 +36,8 @@ struct NamedMaterial {
   Material material;
 };
 
-/// The presets in order from stiffest to softest.
+/// The presets in the order of the README's table: stiff, rubber, jelly, balloon (the last soft
+/// in its springs, held up by its gas).
 std::span<const NamedMaterial> materialPresets();
 
 /// The preset called `name`, or nothing.

@@ -78,6 +78,14 @@ SurfaceMotion staticSurfaceMotion(const CollisionGeometry& geometry,
   return motion;
 }
 
+/// Whether some corner of `box` lies behind `plane`.
+bool reachesBehind(const Box3& box, const PlaneCollider& plane) {
+  Vec3 deepest;
+  for (int axis = 0; axis < 3; ++axis)
+    deepest[axis] = plane.normal[axis] > 0 ? box.min()[axis] : box.max()[axis];
+  return plane.normal.dot(deepest - plane.point) < 0;
+}
+
 double travel(const SurfaceMotion& motion, double gravitySpeed) {
   return motion.moving ? motion.meanVelocity.norm() + motion.deviation + gravitySpeed : 0.0;
 }
@@ -131,6 +139,13 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
     motion.back().box.min().array() -= reach;
     motion.back().box.max().array() += reach;
   }
+  for (SurfaceMotion& surface : motion) {
+    if (!surface.moving) continue;
+    for (const PlaneCollider& plane : topology.planes)
+      surface.mayStop = surface.mayStop || reachesBehind(surface.box, plane);
+    for (const SurfaceMotion& other : motion)
+      surface.mayStop = surface.mayStop || (!other.moving && surface.box.intersects(other.box));
+  }
   for (std::size_t a = 0; a < motion.size(); ++a) {
     if (!motion[a].moving) continue;
     if (geometry.surfaces[a].selfCollision && !inContact(a, a))
@@ -138,10 +153,19 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
     for (std::size_t b = 0; b < motion.size(); ++b) {
       if (b == a || (motion[b].moving && b < a) || inContact(a, b)) continue;  // each pair once
       if (!motion[a].box.intersects(motion[b].box)) continue;
-      const double closing = std::min((motion[a].meanVelocity - motion[b].meanVelocity).norm() +
-                                          motion[a].deviation + motion[b].deviation,
-                                      std::max(motion[a].fastest, motion[b].fastest)) +
-                             gravitySpeed;
+      // Two bodies falling together close at their relative speed, unless one of them lands on
+      // the ground (or a static mesh) within the frame and the other closes on it at its whole
+      // speed: a 10 kg ball falling 1 m behind a 1 kg one met it at 9.5 m/s in a frame of 4
+      // substeps, 0.1 m a substep, and the response's push stored 320 J in the light ball's
+      // springs.
+      const double fastest = std::max(motion[a].fastest, motion[b].fastest);
+      const double closing =
+          (motion[a].mayStop || motion[b].mayStop
+               ? fastest
+               : std::min((motion[a].meanVelocity - motion[b].meanVelocity).norm() +
+                              motion[a].deviation + motion[b].deviation,
+                          fastest)) +
+          gravitySpeed;
       choice.closingSpeed = std::max(choice.closingSpeed, closing);
     }
   }

@@ -86,6 +86,8 @@ struct SurfaceMotion {
   double deviation = 0;  ///< the largest |v − mean| over its vertices
   double fastest = 0;    ///< the largest |v| over its vertices
   bool moving = false;
+  /// It can reach a plane or a static surface within the frame, which may stop it there.
+  bool mayStop = false;
 };
 
 struct ContactAccuracy {

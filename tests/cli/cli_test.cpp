@@ -297,7 +297,7 @@ TEST_F(CliTest, BodiesThatStartInsideEachOtherAreReportedWithWhatTheRunDoes) {
   EXPECT_NE(run.output.find("surfaces intersect at the start: 'left' and 'right' ("),
             std::string::npos)
       << run.output;
-  EXPECT_NE(run.output.find("pushed apart over the first frames"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("taken apart over the first frames"), std::string::npos) << run.output;
   const fs::path glued = writeScene(
       "glued.json", R"({"settings": {"frames": 2, "collisions": {"initial_overlap": "ignore"}}, )" +
                         bodies + "}");
