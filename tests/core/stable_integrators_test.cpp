@@ -208,7 +208,8 @@ INSTANTIATE_TEST_SUITE_P(ImplicitAndXpbd, StableIntegrator,
 void addSlivers(TriangleMesh& mesh, std::size_t every) {
   const std::size_t original = mesh.triangles.size();
   for (std::size_t k = 0; k < original; k += every) {
-    const auto [a, b, c] = mesh.triangles[k];
+    // Named copies, not a structured binding: clang 14 cannot capture those in the lambda.
+    const Index a = mesh.triangles[k][0], b = mesh.triangles[k][1], c = mesh.triangles[k][2];
     const auto across =
         std::find_if(mesh.triangles.begin(), mesh.triangles.end(), [&](const Triangle& t) {
           for (int e = 0; e < 3; ++e)
