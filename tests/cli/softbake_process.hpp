@@ -12,6 +12,8 @@
 #include <iterator>
 #include <string>
 
+#include "tests/support/scratch_directory.hpp"  // readFile
+
 namespace softbake::test {
 
 struct Result {
@@ -45,11 +47,6 @@ inline Result runSoftbake(const std::string& arguments, bool stderrToo = true) {
   const int status = pclose(pipe);
   result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
-}
-
-inline std::string readFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
 }
 
 /// A fresh folder per test under the system temp folder, removed afterwards.

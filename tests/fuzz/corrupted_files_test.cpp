@@ -28,6 +28,7 @@
 #include "fuzz/fuzz_entries.hpp"
 #include "importers/scene_file.hpp"
 #include "tests/cli/softbake_process.hpp"
+#include "tests/support/scratch_directory.hpp"
 
 namespace softbake {
 namespace {
@@ -63,24 +64,6 @@ const GoodFile kGoodFiles[] = {
     {"tests/data/import/box.glb", {}},
     {"tests/data/meshes/cubes_with_mirroring_and_pivot.fbx", {}},
     {"fuzz/seeds/meshes/cube_ascii.fbx", {}},
-};
-
-// A fresh folder for one good file's mutations, removed afterwards.
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "softbake-corrupted-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
 };
 
 std::string bytesOf(const fs::path& file) {
@@ -120,7 +103,7 @@ TEST_P(CorruptedFiles, EndInAClearErrorOrASoundLoad) {
   const fs::path good = kSource / GetParam().path;
   const std::string original = bytesOf(good);
   ASSERT_FALSE(original.empty());
-  ScratchFolder dir;
+  test::ScratchDirectory dir;
   for (const char* companion : GetParam().beside)
     fs::copy_file(kSource / companion, dir.path() / fs::path(companion).filename());
   const fs::path file = dir.path() / good.filename();
