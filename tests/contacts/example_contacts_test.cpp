@@ -105,12 +105,12 @@ std::string exampleTestName(const testing::TestParamInfo<ExampleContacts::ParamT
   return std::get<0>(param.param) + "_" + std::string(integratorName(std::get<1>(param.param)));
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Examples, ExampleContacts,
-    ::testing::Combine(::testing::ValuesIn(exampleNames()),
-                       ::testing::Values(IntegratorKind::Explicit, IntegratorKind::Implicit,
-                                         IntegratorKind::Xpbd)),
-    exampleTestName);
+INSTANTIATE_TEST_SUITE_P(Examples, ExampleContacts,
+                         ::testing::Combine(::testing::ValuesIn(exampleNames()),
+                                            ::testing::Values(IntegratorKind::Explicit,
+                                                              IntegratorKind::Implicit,
+                                                              IntegratorKind::Xpbd)),
+                         exampleTestName);
 
 class ExampleEnergy : public ::testing::TestWithParam<std::string> {};
 
