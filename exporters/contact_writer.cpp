@@ -70,15 +70,11 @@ void ContactWriter::write(const Frame& frame) {
   const std::filesystem::path path = framePath(frame.number);
   // JSON has no NaN: nlohmann would write null, which reads as a missing value, not an error.
   requireFinite(path, frame.time, [&] { return cat("frame ", frame.number, ": the time"); });
-  for (std::size_t i = 0; i < frame.contacts.size(); ++i) {
+  requireFiniteContacts(path, frame, [&](std::size_t i) {
     const Contact& c = frame.contacts[i];
-    const auto contact = [&](std::string_view what) {
-      return cat("frame ", frame.number, ": the ", what, " of contact ", i, " (",
-                 surfaceNames_[c.surfaceA], " on ", surfaceNames_[c.surfaceB], ")");
-    };
-    requireFinite(path, c.position, [&] { return contact("position"); });
-    requireFinite(path, c.normal, [&] { return contact("normal"); });
-  }
+    return cat("contact ", i, " (", surfaceNames_[c.surfaceA], " on ", surfaceNames_[c.surfaceB],
+               ")");
+  });
   const std::string text = frameJson(frame);
   writeFileAtomically(path, text);
   bytes_.fetch_add(text.size(), std::memory_order_relaxed);

@@ -318,13 +318,7 @@ void VdbSequenceWriter::write(const Frame& frame) {
     }
   }
   if (options_.contacts && !frame.contacts.empty()) {
-    for (std::size_t i = 0; i < frame.contacts.size(); ++i) {
-      const Contact& c = frame.contacts[i];
-      requireFinite(path, c.position,
-                    [&] { return cat("frame ", frame.number, ": the position of contact ", i); });
-      requireFinite(path, c.normal,
-                    [&] { return cat("frame ", frame.number, ": the normal of contact ", i); });
-    }
+    requireFiniteContacts(path, frame, [](std::size_t i) { return cat("contact ", i); });
     const openvdb::math::Transform::Ptr transform =
         openvdb::math::Transform::createLinearTransform(voxelSize_);
     openvdb::GridBase::Ptr contacts = contactGrid(frame.contacts, up, *transform);

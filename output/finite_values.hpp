@@ -11,6 +11,9 @@
 
 #include <Eigen/Core>
 
+#include "core/text.hpp"
+#include "output/frame.hpp"
+
 namespace softbake {
 
 /// Throws softbake::Error "<file>: not written: <what> is not finite (<components>)".
@@ -37,6 +40,19 @@ void requireFinite(const std::filesystem::path& file, double value, Describe&& d
   if (std::isfinite(value)) [[likely]]
     return;
   refuseNonFinite(file, describe(), {value});
+}
+
+/// requireFinite() on the position and the normal of every contact of `frame`; `name(i)` names
+/// contact i in the message ("contact 3", or with its surfaces).
+template <class Name>
+void requireFiniteContacts(const std::filesystem::path& file, const Frame& frame, Name&& name) {
+  for (std::size_t i = 0; i < frame.contacts.size(); ++i) {
+    const auto describe = [&](std::string_view what) {
+      return cat("frame ", frame.number, ": the ", what, " of ", name(i));
+    };
+    requireFinite(file, frame.contacts[i].position, [&] { return describe("position"); });
+    requireFinite(file, frame.contacts[i].normal, [&] { return describe("normal"); });
+  }
 }
 
 }  // namespace softbake
