@@ -34,15 +34,15 @@ double dot(const Vec3& a, const Vec3& b) {
 }  // namespace
 
 ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
-    : rowStart_(topology.particleCount() + 1, 0),
+    : matrix_(topology),
       springBlock_(topology.springs.size()),
       springVelocity_(topology.springs.size(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
       inverseDiagonal_(topology.particleCount(), Mat3::Zero()),
-      deltaV_(topology.particleCount(), Vec3::Zero()),
+      deltaV_(matrix_.paddedSize(), Vec3::Zero()),
       residual_(topology.particleCount(), Vec3::Zero()),
       preconditioned_(topology.particleCount(), Vec3::Zero()),
-      direction_(topology.particleCount(), Vec3::Zero()),
+      direction_(matrix_.paddedSize(), Vec3::Zero()),
       product_(topology.particleCount(), Vec3::Zero()),
       chunkSum_((topology.particleCount() + kChunk - 1) / kChunk),
       holdNormal_(topology.particleCount(), Vec3::Zero()),
@@ -50,23 +50,10 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       holdFriction_(topology.particleCount(), 0),
       holdResidual_(topology.particleCount(), 0),
       holdFrictionChange_(topology.particleCount(), Vec3::Zero()),
+      isHeld_(topology.particleCount(), 0),
       bodyHeld_(topology.bodies.size(), 0) {
+  static_assert(kChunk % SlicedSpringMatrix::kLanes == 0, "a chunk holds whole slices");
   held_.reserve(topology.particleCount());
-  deltaV_.push_back(Vec3::Zero());  // the zero entry pinned neighbours read
-  direction_.push_back(Vec3::Zero());
-  for (Index i = 0; i < topology.particleCount(); ++i) {
-    rowStart_[i] = Index(rowNeighbour_.size());
-    if (topology.inverseMass[i] == 0) continue;  // a pinned row is zero
-    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
-      const Index ref = topology.springRefs[r];
-      const Spring& spring = topology.springs[ref >> 1];
-      const Index other = (ref & 1) ? spring.a : spring.b;
-      // A pinned column: its Δv is zero, so it reads the always-zero entry past the particles.
-      rowNeighbour_.push_back(topology.inverseMass[other] == 0 ? topology.particleCount() : other);
-    }
-  }
-  rowStart_.back() = Index(rowNeighbour_.size());
-  rowBlock_.resize(rowNeighbour_.size());
   for (Index b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
     bool pinned = false;
@@ -77,7 +64,8 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
 }
 
 void ImplicitEuler::hold(Index particle, const Vec3& normal, Scalar normalSpeed, Scalar friction) {
-  if (holdNormal_[particle] == Vec3::Zero()) held_.push_back(particle);
+  if (!isHeld_[particle]) held_.push_back(particle);
+  isHeld_[particle] = 1;
   holdNormal_[particle] = normal;
   holdSpeed_[particle] = normalSpeed;
   holdFriction_[particle] = friction;
@@ -86,6 +74,7 @@ void ImplicitEuler::hold(Index particle, const Vec3& normal, Scalar normalSpeed,
 void ImplicitEuler::releaseHolds() {
   for (Index i : held_) {
     holdNormal_[i].setZero();
+    isHeld_[i] = 0;
     holdResidual_[i] = 0;
     holdFrictionChange_[i].setZero();
   }
@@ -166,7 +155,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       else
         b += springVelocity_[s];
       const SpringBlock& block = springBlock_[s];
-      rowBlock_[rowStart_[i] + (r - topology.springRowStart[i])] = block;
+      matrix_.setBlock(i, r - topology.springRowStart[i], block.axis, block.along, block.isotropic);
       diagonal += block.along * block.axis * block.axis.transpose();
       diagonal.diagonal().array() += block.isotropic;
     }
@@ -189,26 +178,13 @@ std::pair<double, double> ImplicitEuler::sumOverChunks(std::size_t count, const 
 }
 
 double ImplicitEuler::multiplyDirection(const SceneTopology& topology) {
-  const Scalar* mass = topology.mass.data();
-  const Scalar* inverseMass = topology.inverseMass.data();
-  return sumOverChunks(
-             topology.particleCount(),
-             [&](std::size_t begin, std::size_t end) {
-               double curvature = 0;
-               for (std::size_t i = begin; i < end; ++i) {
-                 if (inverseMass[i] == 0) {  // the constraint filter: pinned rows are zero
-                   product_[i].setZero();
-                   continue;
-                 }
-                 const Vec3 in = direction_[i];
-                 Vec3 sum = mass[i] * in;
-                 for (Index r = rowStart_[i]; r < rowStart_[i + 1]; ++r)
-                   sum += rowBlock_[r].times(in - direction_[rowNeighbour_[r]]);
-                 product_[i] = sum;
-                 curvature += dot(in, sum);
-               }
-               return std::pair<double, double>{curvature, 0};
-             })
+  return sumOverChunks(topology.particleCount(),
+                       [&](std::size_t begin, std::size_t end) {
+                         return std::pair<double, double>{
+                             matrix_.multiply(direction_.data(), product_.data(),
+                                              topology.inverseMass.data(), begin, end),
+                             0};
+                       })
       .first;
 }
 
@@ -261,10 +237,15 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       double rr = 0, rzChunk = 0;
       for (std::size_t i = begin; i < end; ++i) {
         deltaV_[i] += alpha * direction_[i];
-        const Scalar normalPart = holdNormal_[i].dot(product_[i]);
-        holdResidual_[i] -= alpha * normalPart;
-        residual_[i] -= alpha * (product_[i] - normalPart * holdNormal_[i]);
-        preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
+        if (isHeld_[i]) {
+          const Scalar normalPart = holdNormal_[i].dot(product_[i]);
+          holdResidual_[i] -= alpha * normalPart;
+          residual_[i] -= alpha * (product_[i] - normalPart * holdNormal_[i]);
+          preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
+        } else {  // the filter with a zero normal, without its work
+          residual_[i] -= alpha * product_[i];
+          preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
+        }
         rr += dot(residual_[i], residual_[i]);
         rzChunk += dot(residual_[i], preconditioned_[i]);
       }

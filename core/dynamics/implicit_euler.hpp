@@ -19,13 +19,11 @@
 /// of blowing up. That numerical damping grows with h; more substeps reduce it.
 ///
 /// A block is stored as S = α·d̂d̂ᵀ + β·I (α = h·c + h²·k·L/l, β = h²·k·max(0, 1 − L/l)): five
-/// numbers instead of nine, and fewer operations in the product. Each particle's incidence row is
-/// flattened once into neighbours, a pinned neighbour pointing at an entry past the particles that
-/// stays zero (its Δv is zero: the constraint filter), and each step copies the row's blocks beside
-/// it, so the product reads memory in order and no Spring. Each CG iteration is three parallel
-/// passes:
-/// the product with its curvature dot, the update of Δv and the residual with both residual dots,
-/// and the new search direction. CG is preconditioned by the inverse 3×3 diagonal blocks.
+/// numbers instead of nine, and fewer operations in the product, which is laid out for SIMD
+/// (core/dynamics/sliced_spring_matrix.hpp): each step copies the blocks into it, so the product
+/// reads memory in order and no Spring. Each CG iteration is three parallel passes: the product
+/// with its curvature dot, the update of Δv and the residual with both residual dots, and the new
+/// search direction. CG is preconditioned by the inverse 3×3 diagonal blocks.
 ///
 /// Particles resting on a static surface are held by the same filter along the surface's normal
 /// alone (§5.3 and §6): their Δv has a prescribed normal part, the one that leaves them at the
@@ -52,6 +50,7 @@
 #include <Eigen/Core>
 
 #include "core/dynamics/forces.hpp"
+#include "core/dynamics/sliced_spring_matrix.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -127,18 +126,16 @@ class ImplicitEuler {
     return x - n.dot(x) * n;
   }
 
-  std::vector<Index> freeBodies_;      ///< bodies without pinned particles
-  std::vector<Index> rowStart_;        ///< per particle, its range in rowNeighbour_/rowBlock_
-  std::vector<Index> rowNeighbour_;    ///< the other end of each spring of the row (n if pinned)
-  std::vector<SpringBlock> rowBlock_;  ///< that spring's S, copied in row order: the product reads
-                                       ///< its rows front to back
+  std::vector<Index> freeBodies_;         ///< bodies without pinned particles
+  SlicedSpringMatrix matrix_;             ///< M + Σ S, for the product
   std::vector<SpringBlock> springBlock_;  ///< S of every spring
   std::vector<Vec3> springVelocity_;  ///< h²·K_s·(v_b − v_a): the spring's share of h²·K·v₀ at `a`
   std::vector<Vec3> rhs_;             ///< b, per particle
   /// Block-Jacobi preconditioner: the inverse of each particle's 3×3 diagonal block of M + Σ S.
   /// A third fewer iterations than the scalar diagonal, since a block holds the springs' axes.
   std::vector<Mat3> inverseDiagonal_;
-  /// deltaV_ and direction_, the product's inputs, have one more entry than particles, always 0.
+  /// deltaV_ and direction_, the product's inputs, have matrix_.paddedSize() entries; those past
+  /// the particles are always 0.
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
   std::vector<std::pair<double, double>> chunkSum_;
   /// Holds of the next step, per particle: the unit normal (zero when not held), the velocity
@@ -147,6 +144,7 @@ class ImplicitEuler {
   std::vector<Scalar> holdSpeed_, holdFriction_, holdResidual_;
   std::vector<Vec3> holdFrictionChange_;  ///< friction's velocity change at held particles
   std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
+  std::vector<char> isHeld_;              ///< per particle: it has a hold
   std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
   ImplicitSolveStats stats_;
 };

@@ -1,0 +1,71 @@
+#pragma once
+/// The matrix of the implicit step, M + Σ S over the springs, laid out for SIMD: the product that
+/// conjugate gradients spends most of its time in.
+///
+/// Every spring couples its two ends by a symmetric 3×3 block S = α·d̂d̂ᵀ + β·I, kept as five
+/// numbers (the axis d̂, α and β). Row i of the product is
+///
+///   (A·x)_i = m_i·x_i + Σ_{springs s at i} S_s·(x_i − x_other(s)).
+///
+/// The layout is sliced ELLPACK (Kreutzer et al., "A unified sparse matrix data format for
+/// efficient general sparse matrix-vector multiplication on modern processors with wide SIMD
+/// units", SIAM J. Sci. Comput. 2014; SELL-C-σ with C = kLanes and σ = 1): particles go in slices
+/// of kLanes, each slice's rows are padded to its longest, and the neighbour and each of the five
+/// numbers are stored slot by slot, a lane per particle. One pass over a slice computes its
+/// particles' rows side by side, each lane in the order of its own incidence row, so every
+/// particle's sum is the same operations in the same order as its row walked alone: the lanes
+/// change no bit of the result, on any width of vector unit. A pinned neighbour and a padding slot
+/// read an entry past the particles that the caller keeps at zero (a pinned Δv is zero: the
+/// constraint filter), and a padding slot's block is zero as well.
+///
+/// Where the processor has AVX2, the product runs in 256-bit registers (chosen once at run time);
+/// elsewhere in SSE2's, with the same result. No FMA is used: a fused multiply-add rounds once
+/// instead of twice and would change the result from one processor to the next.
+
+#include <cstddef>
+#include <vector>
+
+#include "core/scene/scene_topology.hpp"
+
+namespace softbake {
+
+class SlicedSpringMatrix {
+ public:
+  /// Particles per slice: eight floats fill an AVX register, two SSE ones.
+  static constexpr std::size_t kLanes = 8;
+
+  /// The layout of `topology`'s incidence rows. Pinned particles have empty rows; a pinned
+  /// neighbour reads the zero entry.
+  explicit SlicedSpringMatrix(const SceneTopology& topology);
+
+  /// Length the product's vectors must have: whole slices plus the zero entry, which is entry
+  /// particleCount() (the entries from particleCount() on are read as zero and must stay so).
+  std::size_t paddedSize() const { return laneMass_.size() + 1; }
+
+  /// Sets the block of the k-th spring of particle i's incidence row (topology.springRowStart).
+  void setBlock(Index i, Index k, const Vec3& axis, Scalar along, Scalar isotropic) {
+    const std::size_t slot = (std::size_t(sliceStart_[i / kLanes]) + k) * kLanes + i % kLanes;
+    axisX_[slot] = axis.x();
+    axisY_[slot] = axis.y();
+    axisZ_[slot] = axis.z();
+    along_[slot] = along;
+    isotropic_[slot] = isotropic;
+  }
+
+  /// product[i] = (A·x)_i for the particles in [begin, end), zero where `inverseMass` is zero;
+  /// returns Σ x_i·(A·x)_i over them in double, summed in particle order. `begin` is a multiple of
+  /// kLanes; x has paddedSize() entries.
+  double multiply(const Vec3* x, Vec3* product, const Scalar* inverseMass, std::size_t begin,
+                  std::size_t end) const;
+
+ private:
+  friend struct SlicedSpringMatrixKernel;
+
+  std::vector<Index> sliceStart_;  ///< per slice, its first slot; one more at the end
+  std::vector<Index> neighbour_;   ///< per slot, the other end (the zero entry if pinned or none)
+  std::vector<Scalar> axisX_, axisY_, axisZ_, along_, isotropic_;  ///< per slot, its block
+  std::vector<Scalar> laneMass_;  ///< the masses, padded with zeros to whole slices
+  bool avx2_ = false;             ///< the processor runs AVX2
+};
+
+}  // namespace softbake
