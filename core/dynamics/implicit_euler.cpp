@@ -35,8 +35,7 @@ double dot(const Vec3& a, const Vec3& b) {
 
 ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
     : matrix_(topology),
-      springBlock_(topology.springs.size()),
-      springVelocity_(topology.springs.size(), Vec3::Zero()),
+      slotVelocity_(matrix_.slotCount(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
       inverseDiagonal_(topology.particleCount(), Mat3::Zero()),
       deltaV_(matrix_.paddedSize(), Vec3::Zero()),
@@ -105,35 +104,40 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
 
 void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                              const SimulationState& state) {
-  // Per spring: its block S and h²·K_s·(v_b − v_a).
+  // Per spring: its block S, and h²·K_s·(v_b − v_a) into the slot of its `a` end, the opposite
+  // into that of its `b` end: each particle's row then reads its own slots, in order.
   const Spring* springs = topology.springs.data();
   const Vec3* x = state.position.data();
   const Vec3* v = state.velocity.data();
-  SpringBlock* blocks = springBlock_.data();
-  Vec3* springVelocity = springVelocity_.data();
+  Vec3* slotVelocity = slotVelocity_.data();
+  SlicedSpringMatrix& matrix = matrix_;
   const Scalar h = dt, h2 = dt * dt;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.springs.size(), kSpringGrain),
-                    [=](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t s = range.begin(); s != range.end(); ++s) {
-                        const Spring& spring = springs[s];
-                        const Vec3 d = x[spring.b] - x[spring.a];
-                        const Scalar length = d.norm();
-                        if (!(length > Scalar(0))) {
-                          blocks[s] = {};
-                          springVelocity[s].setZero();
-                          continue;
-                        }
-                        // ∂f_a/∂x_b = k·(d̂d̂ᵀ + t·(I − d̂d̂ᵀ)) = k·((1 − t)·d̂d̂ᵀ + t·I), with the
-                        // transverse factor t = 1 − L/l clamped at 0.
-                        const Scalar transverse =
-                            std::max(Scalar(0), Scalar(1) - spring.restLength / length);
-                        SpringBlock stiffness{d / length, spring.stiffness * (1 - transverse),
-                                              spring.stiffness * transverse};
-                        springVelocity[s] = h2 * stiffness.times(v[spring.b] - v[spring.a]);
-                        blocks[s] = {stiffness.axis, h * spring.damping + h2 * stiffness.along,
-                                     h2 * stiffness.isotropic};
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, topology.springs.size(), kSpringGrain),
+      [=, &matrix](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t s = range.begin(); s != range.end(); ++s) {
+          const Spring& spring = springs[s];
+          const Vec3 d = x[spring.b] - x[spring.a];
+          const Scalar length = d.norm();
+          SpringBlock block;
+          Vec3 velocityTerm = Vec3::Zero();
+          if (length > Scalar(0)) {
+            // ∂f_a/∂x_b = k·(d̂d̂ᵀ + t·(I − d̂d̂ᵀ)) = k·((1 − t)·d̂d̂ᵀ + t·I), with the transverse
+            // factor t = 1 − L/l clamped at 0.
+            const Scalar transverse = std::max(Scalar(0), Scalar(1) - spring.restLength / length);
+            SpringBlock stiffness{d / length, spring.stiffness * (1 - transverse),
+                                  spring.stiffness * transverse};
+            velocityTerm = h2 * stiffness.times(v[spring.b] - v[spring.a]);
+            block = {stiffness.axis, h * spring.damping + h2 * stiffness.along,
+                     h2 * stiffness.isotropic};
+          }
+          matrix.setSpringBlock(s, block.axis, block.along, block.isotropic);
+          if (const std::size_t at = matrix.slotAtA(s); at != SlicedSpringMatrix::kNoSlot)
+            slotVelocity[at] = velocityTerm;
+          if (const std::size_t at = matrix.slotAtB(s); at != SlicedSpringMatrix::kNoSlot)
+            slotVelocity[at] = -velocityTerm;
+        }
+      });
 
   // Per particle: b = h·f₀ + h²·K·v₀, and the block-Jacobi preconditioner.
   const Scalar* mass = topology.mass.data();
@@ -146,18 +150,12 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
     }
     Vec3 b = h * particleForce(topology, forces, i);
     Mat3 diagonal = Mat3::Identity() * mass[i];
-    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
-      const Index ref = topology.springRefs[r];
-      const Index s = ref >> 1;
-      // The `a` end gets K_s·(v_b − v_a); the `b` end the opposite.
-      if (ref & 1)
-        b -= springVelocity_[s];
-      else
-        b += springVelocity_[s];
-      const SpringBlock& block = springBlock_[s];
-      matrix_.setBlock(i, r - topology.springRowStart[i], block.axis, block.along, block.isotropic);
-      diagonal += block.along * block.axis * block.axis.transpose();
-      diagonal.diagonal().array() += block.isotropic;
+    for (Index k = 0; k < topology.springRowStart[i + 1] - topology.springRowStart[i]; ++k) {
+      const std::size_t at = matrix_.slot(i, k);
+      b += slotVelocity_[at];
+      const Vec3 axis = matrix_.axis(at);
+      diagonal += matrix_.along(at) * axis * axis.transpose();
+      diagonal.diagonal().array() += matrix_.isotropic(at);
     }
     rhs_[i] = b;
     inverseDiagonal_[i] = diagonal.inverse();

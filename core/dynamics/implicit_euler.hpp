@@ -126,11 +126,11 @@ class ImplicitEuler {
     return x - n.dot(x) * n;
   }
 
-  std::vector<Index> freeBodies_;         ///< bodies without pinned particles
-  SlicedSpringMatrix matrix_;             ///< M + Σ S, for the product
-  std::vector<SpringBlock> springBlock_;  ///< S of every spring
-  std::vector<Vec3> springVelocity_;  ///< h²·K_s·(v_b − v_a): the spring's share of h²·K·v₀ at `a`
-  std::vector<Vec3> rhs_;             ///< b, per particle
+  std::vector<Index> freeBodies_;  ///< bodies without pinned particles
+  SlicedSpringMatrix matrix_;      ///< M + Σ S, for the product
+  /// Per slot of matrix_, its spring's share of h²·K·v₀ in that row: h²·K_s·(v_b − v_a) at `a`.
+  std::vector<Vec3> slotVelocity_;
+  std::vector<Vec3> rhs_;  ///< b, per particle
   /// Block-Jacobi preconditioner: the inverse of each particle's 3×3 diagonal block of M + Σ S.
   /// A third fewer iterations than the scalar diagonal, since a block holds the springs' axes.
   std::vector<Mat3> inverseDiagonal_;

@@ -25,14 +25,15 @@ SlicedSpringMatrix::SlicedSpringMatrix(const SceneTopology& topology) {
   for (std::vector<Scalar>* numbers : {&axisX_, &axisY_, &axisZ_, &along_, &isotropic_})
     numbers->assign(slots, 0);
   laneMass_.assign(slices * kLanes, 0);
+  springSlot_.assign(2 * topology.springs.size(), kNoSlot);
   for (Index i = 0; i < n; ++i) {
     laneMass_[i] = topology.mass[i];
     for (Index k = 0; k < rowLength(i); ++k) {
       const Index ref = topology.springRefs[topology.springRowStart[i] + k];
       const Spring& spring = topology.springs[ref >> 1];
       const Index other = (ref & 1) ? spring.a : spring.b;
-      if (topology.inverseMass[other] != 0)
-        neighbour_[(std::size_t(sliceStart_[i / kLanes]) + k) * kLanes + i % kLanes] = other;
+      if (topology.inverseMass[other] != 0) neighbour_[slot(i, k)] = other;
+      springSlot_[2 * (ref >> 1) + (ref & 1)] = slot(i, k);
     }
   }
 #if defined(__x86_64__)

@@ -42,15 +42,32 @@ class SlicedSpringMatrix {
   /// particleCount() (the entries from particleCount() on are read as zero and must stay so).
   std::size_t paddedSize() const { return laneMass_.size() + 1; }
 
-  /// Sets the block of the k-th spring of particle i's incidence row (topology.springRowStart).
-  void setBlock(Index i, Index k, const Vec3& axis, Scalar along, Scalar isotropic) {
-    const std::size_t slot = (std::size_t(sliceStart_[i / kLanes]) + k) * kLanes + i % kLanes;
-    axisX_[slot] = axis.x();
-    axisY_[slot] = axis.y();
-    axisZ_[slot] = axis.z();
-    along_[slot] = along;
-    isotropic_[slot] = isotropic;
+  /// No slot: the end of a spring at a pinned particle, whose row is empty.
+  static constexpr std::size_t kNoSlot = std::size_t(-1);
+
+  std::size_t slotCount() const { return neighbour_.size(); }
+  /// The slot of the k-th spring of particle i's incidence row (topology.springRowStart).
+  std::size_t slot(Index i, Index k) const {
+    return (std::size_t(sliceStart_[i / kLanes]) + k) * kLanes + i % kLanes;
   }
+  /// The slots of spring s in the rows of its ends a and b (kNoSlot at a pinned end).
+  std::size_t slotAtA(std::size_t s) const { return springSlot_[2 * s]; }
+  std::size_t slotAtB(std::size_t s) const { return springSlot_[2 * s + 1]; }
+
+  /// Sets spring s's block α·d̂d̂ᵀ + β·I in the rows of both its ends.
+  void setSpringBlock(std::size_t s, const Vec3& axis, Scalar along, Scalar isotropic) {
+    for (const std::size_t at : {slotAtA(s), slotAtB(s)}) {
+      if (at == kNoSlot) continue;
+      axisX_[at] = axis.x();
+      axisY_[at] = axis.y();
+      axisZ_[at] = axis.z();
+      along_[at] = along;
+      isotropic_[at] = isotropic;
+    }
+  }
+  Vec3 axis(std::size_t slot) const { return Vec3(axisX_[slot], axisY_[slot], axisZ_[slot]); }
+  Scalar along(std::size_t slot) const { return along_[slot]; }
+  Scalar isotropic(std::size_t slot) const { return isotropic_[slot]; }
 
   /// product[i] = (A·x)_i for the particles in [begin, end), zero where `inverseMass` is zero;
   /// returns Σ x_i·(A·x)_i over them in double, summed in particle order. `begin` is a multiple of
@@ -63,6 +80,7 @@ class SlicedSpringMatrix {
 
   std::vector<Index> sliceStart_;  ///< per slice, its first slot; one more at the end
   std::vector<Index> neighbour_;   ///< per slot, the other end (the zero entry if pinned or none)
+  std::vector<std::size_t> springSlot_;  ///< per spring, its slots at ends a and b
   std::vector<Scalar> axisX_, axisY_, axisZ_, along_, isotropic_;  ///< per slot, its block
   std::vector<Scalar> laneMass_;  ///< the masses, padded with zeros to whole slices
   bool avx2_ = false;             ///< the processor runs AVX2

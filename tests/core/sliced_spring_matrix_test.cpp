@@ -37,13 +37,9 @@ class SlicedSpringMatrixTest : public testing::Test {
 
   SlicedSpringMatrix filled() const {
     SlicedSpringMatrix matrix(topology);
-    for (Index i = 0; i < topology.particleCount(); ++i)
-      for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
-        if (topology.inverseMass[i] == 0) continue;
-        const Block& block = blocks[topology.springRefs[r] >> 1];
-        matrix.setBlock(i, r - topology.springRowStart[i], block.axis.cast<Scalar>(),
-                        Scalar(block.along), Scalar(block.isotropic));
-      }
+    for (std::size_t s = 0; s < topology.springs.size(); ++s)
+      matrix.setSpringBlock(s, blocks[s].axis.cast<Scalar>(), Scalar(blocks[s].along),
+                            Scalar(blocks[s].isotropic));
     return matrix;
   }
 
@@ -87,6 +83,23 @@ TEST_F(SlicedSpringMatrixTest, MultipliesAsTheSpringsDo) {
   }
   EXPECT_EQ(product[3], Vec3::Zero()) << "a pinned row is zero";
   EXPECT_NEAR(curvature, expectedCurvature, 1e-5 * std::abs(expectedCurvature));
+}
+
+TEST_F(SlicedSpringMatrixTest, EachSpringHasASlotInTheRowOfEachFreeEnd) {
+  const SlicedSpringMatrix matrix(topology);
+  std::vector<int> seen(matrix.slotCount(), 0);
+  for (Index i = 0; i < topology.particleCount(); ++i)
+    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
+      const Index ref = topology.springRefs[r];
+      const std::size_t at = (ref & 1) ? matrix.slotAtB(ref >> 1) : matrix.slotAtA(ref >> 1);
+      if (topology.inverseMass[i] == 0) {
+        EXPECT_EQ(at, SlicedSpringMatrix::kNoSlot) << "a pinned row is empty";
+        continue;
+      }
+      EXPECT_EQ(at, matrix.slot(i, r - topology.springRowStart[i]));
+      ++seen.at(at);
+    }
+  for (std::size_t at = 0; at < seen.size(); ++at) EXPECT_LE(seen[at], 1) << "slot " << at;
 }
 
 TEST_F(SlicedSpringMatrixTest, AnyRangeOfWholeSlicesGivesTheSameBytes) {
