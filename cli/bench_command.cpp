@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -88,6 +89,9 @@ struct StepRecord {
   std::vector<int> frames;     ///< the frame each step computes
   double framesSimulated = 0;  ///< whole frames, plus the finished part of a last partial one
   std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
+  /// The largest |V/V_rest − 1| of any closed body at the end of any frame: how round the bodies
+  /// stayed, the measure peers are compared at.
+  double maxVolumeError = 0;
   double simulationSeconds = 0;
 };
 
@@ -121,6 +125,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
   record.contacts.reserve(expected);
   record.frames.reserve(expected);
   Frame frame;
+  ForceBuffers volumes(simulator.topology());  // the frame's volumes, outside the timed steps
   simulator.measureStages(true);
   for (int frameNumber = 2; stepLimit || frameNumber <= lastFrame; ++frameNumber) {
     simulator.beginFrame();
@@ -134,10 +139,18 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       record.pairs.push_back(std::uint32_t(simulator.lastStepCandidatePairs()));
       record.contacts.push_back(std::uint32_t(simulator.contacts().size()));
       record.frames.push_back(frameNumber);
-      if (const auto solve = simulator.lastSolve()) record.solverIterations += solve->iterations;
+      if (const auto solve = simulator.lastSolve())
+        record.solverIterations += solve->stepIterations;
     }
     record.framesSimulated += double(substep) / substeps;
     if (substep < substeps) break;  // the step limit ended the run inside this frame
+    computeVolumes(simulator.topology(), simulator.state(), volumes);
+    for (std::size_t b = 0; b < simulator.topology().bodies.size(); ++b) {
+      const Body& body = simulator.topology().bodies[b];
+      if (body.closed && body.restVolume > 0)
+        record.maxVolumeError =
+            std::max(record.maxVolumeError, std::abs(volumes.bodyVolume[b] / body.restVolume - 1));
+    }
     if (!exports.empty()) {
       frame.number = frameNumber;
       frame.time = (frameNumber - 1) / fps;
@@ -287,13 +300,14 @@ int bench(const BenchOptions& options) {
         "scene=%s faces=%zu broadphase=%s pair_cache=%d threads=%d warmup=%ld steps=%zu "
         "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
-        "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f\n",
+        "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f "
+        "max_volume_error=%.4f\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
-        double(record.solverIterations) / double(steps));
+        double(record.solverIterations) / double(steps), record.maxVolumeError);
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record);
   }

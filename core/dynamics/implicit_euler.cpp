@@ -261,6 +261,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
 bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                          SimulationState& state, std::span<Vec3> substepStart) {
   assemble(topology, forces, dt, state);
+  stepIterations_ = 0;
   return stepAgain(topology, dt, state, substepStart);
 }
 
@@ -269,6 +270,8 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
   // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);
+  stepIterations_ += stats_.iterations;
+  stats_.stepIterations = stepIterations_;
   restoreMomentum(topology);
   // Coulomb friction at held particles, from the surface's impulse on each. Kept apart from Δv,
   // which warm-starts the next solve: folded into it, friction's change (a particle stopped dead,

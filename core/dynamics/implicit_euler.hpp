@@ -58,7 +58,10 @@ namespace softbake {
 
 /// How the latest solve went.
 struct ImplicitSolveStats {
-  int iterations = 0;           ///< conjugate-gradient iterations
+  int iterations = 0;  ///< conjugate-gradient iterations
+  /// Those of every solve of the latest step: a step taken again for particles that met a plane
+  /// (stepAgain) solves twice.
+  int stepIterations = 0;
   double relativeResidual = 0;  ///< |r| / |b| at the end (0 when b is 0)
 };
 
@@ -146,6 +149,7 @@ class ImplicitEuler {
   std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
   std::vector<char> isHeld_;              ///< per particle: it has a hold
   std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
+  int stepIterations_ = 0;                ///< CG iterations of the latest step's solves
   ImplicitSolveStats stats_;
 };
 
