@@ -75,7 +75,8 @@ void Simulator::step(int frame) {
   ++stepsTaken_;
   // XPBD solves springs and gas within its step, from positions it moves as it goes.
   if (!xpbd_) {
-    computeSpringForces(topology, state_, forces_);
+    // The implicit step computes its springs' forces with their Jacobians, in one pass.
+    if (!implicit_) computeSpringForces(topology, state_, forces_);
     computeVolumes(topology, state_, forces_);
     computePressureForces(topology, state_, forces_);
     clock.lap(Stage::Forces);

@@ -39,11 +39,7 @@ void computeSpringForces(const SceneTopology& topology, const SimulationState& s
                           out[s].setZero();
                           continue;
                         }
-                        const Vec3 axis = d / length;
-                        const Scalar stretch = spring.stiffness * (length - spring.restLength);
-                        const Scalar closing =
-                            spring.damping * (v[spring.b] - v[spring.a]).dot(axis);
-                        out[s] = (stretch + closing) * axis;
+                        out[s] = springForceOnA(spring, d, length, v);
                       }
                     });
 }

@@ -26,6 +26,15 @@ struct ForceBuffers {
 void computeSpringForces(const SceneTopology& topology, const SimulationState& state,
                          ForceBuffers& forces);
 
+/// The force of `spring` on its `a` end, from d = x_b − x_a, |d| > 0 and the velocities: the one
+/// formula computeSpringForces() and the implicit step's assembly share.
+inline Vec3 springForceOnA(const Spring& spring, const Vec3& d, Scalar length, const Vec3* v) {
+  const Vec3 axis = d / length;
+  const Scalar stretch = spring.stiffness * (length - spring.restLength);
+  const Scalar closing = spring.damping * (v[spring.b] - v[spring.a]).dot(axis);
+  return (stretch + closing) * axis;
+}
+
 /// Enclosed volume of every closed body by the divergence theorem, V = Σ a·(b×c)/6, summed in
 /// double over fixed chunks so the result does not depend on the thread count.
 void computeVolumes(const SceneTopology& topology, const SimulationState& state,

@@ -36,6 +36,7 @@ double dot(const Vec3& a, const Vec3& b) {
 ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
     : matrix_(topology),
       slotVelocity_(matrix_.slotCount(), Vec3::Zero()),
+      slotForce_(matrix_.slotCount(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
       inverseDiagonal_(topology.particleCount(), Mat3::Zero()),
       deltaV_(matrix_.paddedSize(), Vec3::Zero()),
@@ -104,12 +105,14 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
 
 void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                              const SimulationState& state) {
-  // Per spring: its block S, and h²·K_s·(v_b − v_a) into the slot of its `a` end, the opposite
-  // into that of its `b` end: each particle's row then reads its own slots, in order.
+  // Per spring: its force, its block S and h²·K_s·(v_b − v_a), each into the slot of its `a` end
+  // and the opposite into that of its `b` end: each particle's row then reads its own slots, in
+  // order, instead of gathering by spring.
   const Spring* springs = topology.springs.data();
   const Vec3* x = state.position.data();
   const Vec3* v = state.velocity.data();
   Vec3* slotVelocity = slotVelocity_.data();
+  Vec3* slotForce = slotForce_.data();
   SlicedSpringMatrix& matrix = matrix_;
   const Scalar h = dt, h2 = dt * dt;
   tbb::parallel_for(
@@ -119,6 +122,9 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
           const Spring& spring = springs[s];
           const Vec3 d = x[spring.b] - x[spring.a];
           const Scalar length = d.norm();
+          // As computeSpringForces() has it, NaN included.
+          const Vec3 force =
+              length <= Scalar(0) ? Vec3(Vec3::Zero()) : springForceOnA(spring, d, length, v);
           SpringBlock block;
           Vec3 velocityTerm = Vec3::Zero();
           if (length > Scalar(0)) {
@@ -132,10 +138,14 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
                      h2 * stiffness.isotropic};
           }
           matrix.setSpringBlock(s, block.axis, block.along, block.isotropic);
-          if (const std::size_t at = matrix.slotAtA(s); at != SlicedSpringMatrix::kNoSlot)
+          if (const std::size_t at = matrix.slotAtA(s); at != SlicedSpringMatrix::kNoSlot) {
+            slotForce[at] = force;
             slotVelocity[at] = velocityTerm;
-          if (const std::size_t at = matrix.slotAtB(s); at != SlicedSpringMatrix::kNoSlot)
+          }
+          if (const std::size_t at = matrix.slotAtB(s); at != SlicedSpringMatrix::kNoSlot) {
+            slotForce[at] = -force;
             slotVelocity[at] = -velocityTerm;
+          }
         }
       });
 
@@ -148,9 +158,16 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       inverseDiagonal_[i].setZero();
       return;
     }
-    Vec3 b = h * particleForce(topology, forces, i);
+    // particleForce(), its springs read from the row's slots: gravity, then the springs, then
+    // the triangles' pressure, in the same order.
+    const Index rowLength = topology.springRowStart[i + 1] - topology.springRowStart[i];
+    Vec3 force = mass[i] * topology.settings.gravity;
+    for (Index k = 0; k < rowLength; ++k) force += slotForce_[matrix_.slot(i, k)];
+    for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
+      force += forces.triangleForce[topology.triangleRefs[r]];
+    Vec3 b = h * force;
     Mat3 diagonal = Mat3::Identity() * mass[i];
-    for (Index k = 0; k < topology.springRowStart[i + 1] - topology.springRowStart[i]; ++k) {
+    for (Index k = 0; k < rowLength; ++k) {
       const std::size_t at = matrix_.slot(i, k);
       b += slotVelocity_[at];
       const Vec3 axis = matrix_.axis(at);

@@ -78,7 +78,9 @@ class ImplicitEuler {
 
   explicit ImplicitEuler(const SceneTopology& topology);
 
-  /// One step of `dt` seconds from the forces of `forces` (computed at the current state).
+  /// One step of `dt` seconds from the current state. The springs' forces are computed here, with
+  /// their Jacobians; `forces` supplies the gas pressure (computePressureForces() at the current
+  /// state), and its spring forces are not read.
   /// `substepStart` receives the positions at the start of the step, for the collision stages.
   /// Returns false when some particle's velocity is not finite or exceeds settings.maxSpeed.
   bool step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
@@ -133,6 +135,9 @@ class ImplicitEuler {
   SlicedSpringMatrix matrix_;      ///< M + Σ S, for the product
   /// Per slot of matrix_, its spring's share of h²·K·v₀ in that row: h²·K_s·(v_b − v_a) at `a`.
   std::vector<Vec3> slotVelocity_;
+  /// Per slot, its spring's force on that row's particle (f on `a`, −f on `b`), at the step's
+  /// start.
+  std::vector<Vec3> slotForce_;
   std::vector<Vec3> rhs_;  ///< b, per particle
   /// Block-Jacobi preconditioner: the inverse of each particle's 3×3 diagonal block of M + Σ S.
   /// A third fewer iterations than the scalar diagonal, since a block holds the springs' axes.
