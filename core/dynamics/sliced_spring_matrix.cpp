@@ -36,8 +36,15 @@ SlicedSpringMatrix::SlicedSpringMatrix(const SceneTopology& topology) {
       springSlot_[2 * (ref >> 1) + (ref & 1)] = slot(i, k);
     }
   }
+  useAvx2(true);
+}
+
+void SlicedSpringMatrix::useAvx2(bool on) {
 #if defined(__x86_64__)
-  avx2_ = __builtin_cpu_supports("avx2");
+  avx2_ = on && __builtin_cpu_supports("avx2");
+#else
+  (void)on;
+  avx2_ = false;
 #endif
 }
 

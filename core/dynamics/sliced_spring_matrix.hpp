@@ -69,6 +69,11 @@ class SlicedSpringMatrix {
   Scalar along(std::size_t slot) const { return along_[slot]; }
   Scalar isotropic(std::size_t slot) const { return isotropic_[slot]; }
 
+  /// Whether multiply() runs in AVX2's registers: true where the processor has AVX2. Turned off, it
+  /// runs in SSE2's, with the same result (a test compares the two).
+  bool usesAvx2() const { return avx2_; }
+  void useAvx2(bool on);
+
   /// product[i] = (A·x)_i for the particles in [begin, end), zero where `inverseMass` is zero;
   /// returns Σ x_i·(A·x)_i over them in double, summed in particle order. `begin` is a multiple of
   /// kLanes; x has paddedSize() entries.
