@@ -373,7 +373,7 @@ TEST_P(ContactExampleFrame, MatchesItsGoldenFrame) {
 
 INSTANTIATE_TEST_SUITE_P(HardCases, ContactExampleFrame,
                          ::testing::Values(std::pair("sheet_ball", 48), std::pair("mixed_pile", 48),
-                                           std::pair("heavy_on_jelly", 72),
+                                           std::pair("heavy_on_jelly", 36),
                                            std::pair("glued_assembly", 24),
                                            std::pair("flag_fold", 48)),
                          [](const auto& param) { return std::string(param.param.first); });
