@@ -154,6 +154,48 @@ void Simulator::advanceToFrame(int frame) {
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
 }
 
+SimulationCheckpoint Simulator::checkpoint() const {
+  SimulationCheckpoint checkpoint;
+  checkpoint.state = state_;
+  if (implicit_) {
+    checkpoint.warmStart.assign(implicit_->warmStart().begin(), implicit_->warmStart().end());
+    const std::span<const std::int32_t> holds = holds_->touchedPlane();
+    checkpoint.planeHolds.assign(holds.begin(), holds.end());
+  }
+  checkpoint.touchingPairs = detector_.candidatePairs();
+  checkpoint.tangled = (failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any());
+  checkpoint.stepsTaken = stepsTaken_;
+  return checkpoint;
+}
+
+void Simulator::restore(const SimulationCheckpoint& checkpoint) {
+  const std::size_t n = topology_->particleCount();
+  const bool planeHolds = implicit_ && !topology_->planes.empty();
+  if (checkpoint.state.position.size() != n || checkpoint.state.velocity.size() != n ||
+      checkpoint.warmStart.size() != (implicit_ ? n : 0) ||
+      checkpoint.planeHolds.size() != (planeHolds ? n : 0))
+    throw Error(cat("a checkpoint of ", checkpoint.state.position.size(), " particles",
+                    checkpoint.warmStart.empty() ? "" : " from the implicit integrator",
+                    " does not fit this scene of ", n, " particles under the ",
+                    integratorName(topology_->settings.integrator), " integrator"));
+  for (const TrianglePair& pair : checkpoint.touchingPairs)
+    if (pair.second >= topology_->collision.triangleVertices.size())
+      throw Error(cat("a checkpoint names triangle ", pair.second, " of a scene of ",
+                      topology_->collision.triangleVertices.size(), " collision triangles"));
+  state_ = checkpoint.state;
+  if (implicit_) {
+    implicit_->setWarmStart(checkpoint.warmStart);
+    std::copy(checkpoint.planeHolds.begin(), checkpoint.planeHolds.end(),
+              holds_->touchedPlane().begin());
+  }
+  detector_.restoreCandidatePairs(checkpoint.touchingPairs);
+  // The next frame names the tangled surfaces again from the positions whenever any were left
+  // (beginFrame), so whether any were is all that carries over.
+  nameTangledSurfaces(checkpoint.tangled ? findInitialOverlaps(*topology_, state_.position)
+                                         : InitialOverlaps{});
+  stepsTaken_ = checkpoint.stepsTaken;
+}
+
 void Simulator::reportBlowUp(int frame) const {
   const SceneTopology& topology = *topology_;
   const Index particle = findRunawayParticle(topology, state_);

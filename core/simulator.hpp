@@ -18,6 +18,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/collision/contact.hpp"
 #include "core/collision/detangle.hpp"
 #include "core/collision/detection.hpp"
@@ -94,6 +95,13 @@ class Simulator {
 
   /// All substeps from frame `frame − 1` to `frame`: beginFrame(), then substeps().substeps steps.
   void advanceToFrame(int frame);
+
+  /// At a frame boundary (after advanceToFrame), what the next frames depend on.
+  SimulationCheckpoint checkpoint() const;
+  /// Continues from `checkpoint`, taken from a simulator of the same topology: the frames after
+  /// it come out as they did from that one, bit for bit. Throws softbake::Error when it does not
+  /// fit the topology or the integrator.
+  void restore(const SimulationCheckpoint& checkpoint);
 
  private:
   [[noreturn]] void reportBlowUp(int frame) const;

@@ -58,6 +58,11 @@ class CollisionDetector {
   void dropIgnoredPairs(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
+  /// Sets what candidatePairs() returns until the next detect(): a resumed run's latest substep's
+  /// pairs, which "auto" substeps read at the next frame.
+  void restoreCandidatePairs(std::span<const TrianglePair> pairs) {
+    pairs_.assign(pairs.begin(), pairs.end());
+  }
   /// Sorted by candidate pair, then direction and edge.
   const std::vector<EdgeContact>& edgeContacts() const { return edgeContacts_; }
   /// Sorted by particle, then by when the particle crossed (t), then by triangle.

@@ -32,6 +32,7 @@ class ContactHolds {
   /// Per particle, the plane the plane pass left it on (kNoPlane): what resolvePlaneContacts
   /// records into. Empty when the scene has no planes.
   std::span<std::int32_t> touchedPlane() { return touchedPlane_; }
+  std::span<const std::int32_t> touchedPlane() const { return touchedPlane_; }
 
   /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`.
   void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt);

@@ -9,6 +9,8 @@
 #include <tuple>
 
 #include "core/dynamics/integrator.hpp"
+#include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace softbake {
 
@@ -69,6 +71,13 @@ void ImplicitEuler::hold(Index particle, const Vec3& normal, Scalar normalSpeed,
   holdNormal_[particle] = normal;
   holdSpeed_[particle] = normalSpeed;
   holdFriction_[particle] = friction;
+}
+
+void ImplicitEuler::setWarmStart(std::span<const Vec3> deltaV) {
+  if (deltaV.size() != rhs_.size())
+    throw Error(cat("a warm start of ", deltaV.size(), " velocities does not fit ", rhs_.size(),
+                    " particles"));
+  std::copy(deltaV.begin(), deltaV.end(), deltaV_.begin());
 }
 
 void ImplicitEuler::releaseHolds() {

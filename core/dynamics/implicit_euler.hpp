@@ -94,6 +94,11 @@ class ImplicitEuler {
 
   const ImplicitSolveStats& lastSolve() const { return stats_; }
 
+  /// The latest step's Δv per particle, where the next solve starts from: part of what a
+  /// checkpoint must carry for a resumed run to continue bit for bit.
+  std::span<const Vec3> warmStart() const { return {deltaV_.data(), rhs_.size()}; }
+  void setWarmStart(std::span<const Vec3> deltaV);
+
   /// Holds `particle` on a static surface during the next step: its velocity along the unit
   /// `normal` becomes `normalSpeed`, and `friction` (Coulomb) slows its tangential velocity by
   /// the surface's impulse. A hold lasts until releaseHolds().
