@@ -42,7 +42,6 @@ class ByteWriter {
       for (int k = 0; k < 3; ++k) put(v[k]);
   }
   std::string& bytes() { return bytes_; }
-  void reserve(std::size_t count) { bytes_.reserve(count); }
 
  private:
   std::string bytes_;
