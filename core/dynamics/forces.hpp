@@ -47,18 +47,27 @@ void computePressureForces(const SceneTopology& topology, const SimulationState&
 
 /// Every force on particle `i`: gravity, then its springs, then its triangles' pressure, summed in
 /// the fixed order of its incidence rows (so the sum is the same for any thread count).
-inline Vec3 particleForce(const SceneTopology& topology, const ForceBuffers& forces, Index i) {
+/// `springForceAt(r)` is the force on `i` of the spring at its row entry r (topology.springRefs):
+/// the force buffers' for particleForce(), the implicit step's own for its assembly.
+template <class SpringForceAt>
+inline Vec3 particleForceWith(const SceneTopology& topology, const ForceBuffers& forces, Index i,
+                              const SpringForceAt& springForceAt) {
   Vec3 force = topology.mass[i] * topology.settings.gravity;
-  for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
-    const Index ref = topology.springRefs[r];
-    if (ref & 1)
-      force -= forces.springForce[ref >> 1];
-    else
-      force += forces.springForce[ref >> 1];
-  }
+  for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r)
+    force += springForceAt(r);
   for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
     force += forces.triangleForce[topology.triangleRefs[r]];
   return force;
+}
+
+/// particleForceWith() from the force buffers' spring forces (computeSpringForces()).
+inline Vec3 particleForce(const SceneTopology& topology, const ForceBuffers& forces, Index i) {
+  return particleForceWith(topology, forces, i, [&](Index r) {
+    const Index ref = topology.springRefs[r];
+    const Vec3& force = forces.springForce[ref >> 1];
+    // The `b` end gets the opposite of the `a` end's force.
+    return (ref & 1) ? Vec3(-force) : force;
+  });
 }
 
 /// Gravity and gas pressure on particle `i`, without its springs: what the XPBD integrator applies

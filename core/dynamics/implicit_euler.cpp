@@ -167,14 +167,11 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       inverseDiagonal_[i].setZero();
       return;
     }
-    // particleForce(), its springs read from the row's slots: gravity, then the springs, then
-    // the triangles' pressure, in the same order.
-    const Index rowLength = topology.springRowStart[i + 1] - topology.springRowStart[i];
-    Vec3 force = mass[i] * topology.settings.gravity;
-    for (Index k = 0; k < rowLength; ++k) force += slotForce_[matrix_.slot(i, k)];
-    for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
-      force += forces.triangleForce[topology.triangleRefs[r]];
-    Vec3 b = h * force;
+    const Index rowStart = topology.springRowStart[i];
+    const Index rowLength = topology.springRowStart[i + 1] - rowStart;
+    Vec3 b = h * particleForceWith(topology, forces, i, [&](Index r) {
+               return slotForce_[matrix_.slot(i, r - rowStart)];
+             });
     Mat3 diagonal = Mat3::Identity() * mass[i];
     for (Index k = 0; k < rowLength; ++k) {
       const std::size_t at = matrix_.slot(i, k);
