@@ -1,0 +1,304 @@
+/// Times the off-screen EGL renderer (render/frame_renderer.hpp) frame by frame on procedural
+/// icosphere ball scenes of about 10k and 100k faces (bench/scene_sizes.hpp), so the same program
+/// measures Mesa's llvmpipe on a CPU and a GPU's own EGL driver. No files are read: the scene is
+/// built in code, and each frame squashes the balls a little towards the ground (plain arithmetic,
+/// the same on every machine), so every frame uploads new vertices and normals.
+///
+///   render_bench --faces 10240 --width 1280 --height 720 --frames 30 --png last.png
+///   render_bench --compare a.png b.png [--tolerance 8]
+///
+/// Per frame it times FrameRenderer::renderRgb (upload, draw, multisample resolve, glReadPixels,
+/// which waits for the GPU) and, apart from it, the PNG encoding. The first frame (lazy shader
+/// compilation, first uploads) and the renderer's construction (EGL context, shaders,
+/// framebuffers) are reported separately and left out of the mean and minimum. The last line is
+/// machine-readable:
+///
+///   render_bench faces=... width=... height=... frames=... ms_per_frame=... renderer=...
+///
+/// --compare reads two PNGs and counts the pixels whose channels differ by more than the
+/// tolerance in any channel, the first ten of them by position (the check that a GPU draws the
+/// picture llvmpipe draws). How it was run: bench/results/render_gpu.md.
+
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bench/scene_sizes.hpp"
+#include "core/dynamics/material.hpp"
+#include "core/error.hpp"
+#include "core/mesh/icosphere.hpp"
+#include "core/scene/scene_setup.hpp"
+#include "core/scene/scene_topology.hpp"
+#include "output/frame.hpp"
+#include "render/frame_renderer.hpp"
+
+namespace softbake {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+struct Options {
+  int faces = 10240;
+  int width = 1280, height = 720;
+  int frames = 30;
+  int samples = 4;
+  std::string png;       ///< where the last frame goes; empty: nowhere
+  std::string platform;  ///< EglOptions::platform; empty: SOFTBAKE_EGL_PLATFORM, else "auto"
+};
+
+[[noreturn]] void usage(const char* message) {
+  std::fprintf(stderr,
+               "render_bench: %s\n"
+               "usage: render_bench [--faces 1280|10240|102400|983040] [--width W] [--height H]\n"
+               "                    [--frames F] [--samples S] [--png PATH]\n"
+               "                    [--platform auto|surfaceless|device|default]\n"
+               "       render_bench --compare A.png B.png [--tolerance T]\n",
+               message);
+  std::exit(2);
+}
+
+int toInt(const char* text, const char* flag) {
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (!end || *end != '\0' || value < 0 || value > 1 << 24)
+    usage((std::string("bad value for ") + flag + ": " + text).c_str());
+  return int(value);
+}
+
+/// bench/core_stages_bench.cpp's scene: rubber balls of radius 0.5 m on a grid, 2 cm into the
+/// ground plane.
+SceneSetup ballsScene(const bench::SceneSize& size) {
+  const std::optional<Material> rubber = findMaterialPreset("rubber");
+  if (!rubber) throw Error("no 'rubber' material preset");
+  SceneSetup scene;
+  scene.name = "render_bench";
+  constexpr float kRadius = 0.5f, kSpacing = 1.2f;
+  for (int i = 0; i < size.balls; ++i) {
+    BodySetup body;
+    body.name = "ball" + std::to_string(i);
+    body.mesh =
+        makeIcosphere(size.subdivisions, kRadius,
+                      Vec3f(kSpacing * float(i % 4), kRadius - 0.02f, kSpacing * float(i / 4)));
+    body.material = *rubber;
+    body.mass = 1;
+    scene.bodies.push_back(std::move(body));
+  }
+  scene.planes.push_back(PlaneCollider{});
+  return scene;
+}
+
+/// Frame `number` (1-based): the rest state with every ball squashed towards the ground by up to
+/// 10% and widened to match, a cycle of 16 frames. Multiplications only, so the same on every
+/// machine: the images of two machines differ only where their renderers do.
+void fillFrame(const SceneTopology& topology, int number, Frame& frame) {
+  frame.number = number;
+  frame.time = (number - 1) / 24.0;
+  frame.positions.resize(topology.restPosition.size());
+  frame.velocities.assign(topology.restPosition.size(), Vec3::Zero());
+  frame.contacts.clear();
+  const int phase = (number - 1) % 16;
+  const Scalar squash = Scalar(1) - Scalar(0.1) * Scalar(phase < 8 ? phase : 16 - phase) / 8;
+  const Scalar widen = Scalar(1) + (Scalar(1) - squash) / 2;
+  for (const Body& body : topology.bodies) {
+    Vec3 center = Vec3::Zero();
+    Scalar bottom = 0;
+    for (Index i = 0; i < body.particleCount; ++i) {
+      center += topology.restPosition[body.firstParticle + i];
+      bottom = i == 0 ? topology.restPosition[body.firstParticle].y()
+                      : std::min(bottom, topology.restPosition[body.firstParticle + i].y());
+    }
+    center /= Scalar(body.particleCount);
+    for (Index i = 0; i < body.particleCount; ++i) {
+      const Vec3& p = topology.restPosition[body.firstParticle + i];
+      frame.positions[body.firstParticle + i] =
+          Vec3(center.x() + (p.x() - center.x()) * widen, bottom + (p.y() - bottom) * squash,
+               center.z() + (p.z() - center.z()) * widen);
+    }
+  }
+}
+
+struct Stats {
+  double mean = 0, min = 0, max = 0;
+};
+Stats stats(const std::vector<double>& values) {
+  Stats s;
+  if (values.empty()) return s;
+  s.min = *std::min_element(values.begin(), values.end());
+  s.max = *std::max_element(values.begin(), values.end());
+  for (double v : values) s.mean += v;
+  s.mean /= double(values.size());
+  return s;
+}
+
+/// Spaces in a value of the machine-readable line become underscores.
+std::string token(std::string text) {
+  std::replace(text.begin(), text.end(), ' ', '_');
+  return text;
+}
+
+int runBench(const Options& options) {
+  const bench::SceneSize& size = bench::sceneSize(options.faces);
+  const Clock::time_point buildStart = Clock::now();
+  auto topology = std::make_shared<const SceneTopology>(buildSceneTopology(ballsScene(size)));
+  const double buildMs = msSince(buildStart);
+
+  RenderOptions render;
+  render.width = options.width;
+  render.height = options.height;
+  render.samples = options.samples;
+  render.egl.platform = options.platform;
+
+  const Clock::time_point setupStart = Clock::now();
+  FrameRenderer renderer(makeRenderScene(topology, render), render);
+  const double setupMs = msSince(setupStart);
+  const std::string rendererName = renderer.context().describe();
+  std::printf("scene: %d balls, %zu faces, %zu particles (built in %.1f ms)\n", size.balls,
+              topology->triangles.size(), topology->restPosition.size(), buildMs);
+  std::printf("EGL platform: %s\nGL: %s\n", renderer.context().platform().c_str(),
+              rendererName.c_str());
+  std::printf("image: %dx%d, %d samples asked\n", options.width, options.height, options.samples);
+  std::printf("renderer setup (EGL context, shaders, framebuffers, ground): %.2f ms\n", setupMs);
+
+  Frame frame;
+  std::vector<double> renderMs, encodeMs;
+  double firstRenderMs = 0, firstEncodeMs = 0;
+  std::string png;
+  for (int f = 1; f <= options.frames; ++f) {
+    fillFrame(*topology, f, frame);
+    const Clock::time_point renderStart = Clock::now();
+    const std::vector<std::uint8_t> rgb = renderer.renderRgb(frame);
+    const double rendered = msSince(renderStart);
+    const Clock::time_point encodeStart = Clock::now();
+    png = encodePng(rgb, options.width, options.height);
+    const double encoded = msSince(encodeStart);
+    if (f == 1) {
+      firstRenderMs = rendered;
+      firstEncodeMs = encoded;
+    } else {
+      renderMs.push_back(rendered);
+      encodeMs.push_back(encoded);
+    }
+  }
+  if (!options.png.empty()) {
+    std::ofstream file(options.png, std::ios::binary | std::ios::trunc);
+    file.write(png.data(), std::streamsize(png.size()));
+    if (!file.flush()) throw Error("cannot write " + options.png);
+    std::printf("last frame (%d): %s, %zu bytes\n", options.frames, options.png.c_str(),
+                png.size());
+  }
+  const Stats r = stats(renderMs), e = stats(encodeMs);
+  std::printf("first frame: render %.2f ms, PNG encode %.2f ms\n", firstRenderMs, firstEncodeMs);
+  std::printf(
+      "frames 2..%d: render mean %.3f ms, min %.3f ms, max %.3f ms; PNG encode mean %.3f "
+      "ms, min %.3f ms\n",
+      options.frames, r.mean, r.min, r.max, e.mean, e.min);
+  std::printf(
+      "render_bench faces=%zu width=%d height=%d frames=%d samples=%d ms_per_frame=%.3f "
+      "ms_min=%.3f encode_ms=%.3f first_frame_ms=%.2f setup_ms=%.2f platform=%s renderer=%s\n",
+      topology->triangles.size(), options.width, options.height, options.frames, options.samples,
+      r.mean, r.min, e.mean, firstRenderMs, setupMs, token(renderer.context().platform()).c_str(),
+      token(rendererName).c_str());
+  return 0;
+}
+
+/// Counts the pixels of two same-sized PNGs that differ by more than `tolerance` in any channel.
+int runCompare(const char* a, const char* b, int tolerance) {
+  int wa = 0, ha = 0, ca = 0, wb = 0, hb = 0, cb = 0;
+  std::unique_ptr<unsigned char, void (*)(void*)> pa(stbi_load(a, &wa, &ha, &ca, 3),
+                                                     stbi_image_free);
+  std::unique_ptr<unsigned char, void (*)(void*)> pb(stbi_load(b, &wb, &hb, &cb, 3),
+                                                     stbi_image_free);
+  if (!pa || !pb) {
+    std::fprintf(stderr, "render_bench: cannot read %s\n", !pa ? a : b);
+    return 1;
+  }
+  if (wa != wb || ha != hb) {
+    std::fprintf(stderr, "render_bench: %s is %dx%d, %s is %dx%d\n", a, wa, ha, b, wb, hb);
+    return 1;
+  }
+  const std::size_t pixels = std::size_t(wa) * std::size_t(ha);
+  std::size_t differing = 0, exact = 0;
+  int maxDiff = 0;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    int d = 0;
+    for (int c = 0; c < 3; ++c)
+      d = std::max(d, std::abs(int(pa.get()[i * 3 + c]) - int(pb.get()[i * 3 + c])));
+    maxDiff = std::max(maxDiff, d);
+    if (d > tolerance && differing++ < 10)
+      std::printf("  differs at x=%zu y=%zu by %d: %d,%d,%d vs %d,%d,%d\n", i % std::size_t(wa),
+                  i / std::size_t(wa), d, pa.get()[i * 3], pa.get()[i * 3 + 1], pa.get()[i * 3 + 2],
+                  pb.get()[i * 3], pb.get()[i * 3 + 1], pb.get()[i * 3 + 2]);
+    exact += d == 0;
+  }
+  std::printf(
+      "render_compare a=%s b=%s size=%dx%d tolerance=%d differing=%zu differing_pct=%.4f "
+      "identical=%zu max_diff=%d\n",
+      a, b, wa, ha, tolerance, differing, 100.0 * double(differing) / double(pixels), exact,
+      maxDiff);
+  return 0;
+}
+
+}  // namespace
+}  // namespace softbake
+
+int main(int argc, char** argv) {
+  using namespace softbake;
+  Options options;
+  const char* compare[2] = {nullptr, nullptr};
+  int tolerance = 8;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    auto value = [&](const char* flag) {
+      if (i + 1 >= argc) usage((std::string(flag) + " needs a value").c_str());
+      return argv[++i];
+    };
+    if (arg == "--faces")
+      options.faces = toInt(value("--faces"), "--faces");
+    else if (arg == "--width")
+      options.width = toInt(value("--width"), "--width");
+    else if (arg == "--height")
+      options.height = toInt(value("--height"), "--height");
+    else if (arg == "--frames")
+      options.frames = toInt(value("--frames"), "--frames");
+    else if (arg == "--samples")
+      options.samples = toInt(value("--samples"), "--samples");
+    else if (arg == "--png")
+      options.png = value("--png");
+    else if (arg == "--platform")
+      options.platform = value("--platform");
+    else if (arg == "--tolerance")
+      tolerance = toInt(value("--tolerance"), "--tolerance");
+    else if (arg == "--compare") {
+      compare[0] = value("--compare");
+      compare[1] = value("--compare");
+    } else if (arg == "--help" || arg == "-h")
+      usage("help");
+    else
+      usage(("unknown argument " + std::string(arg)).c_str());
+  }
+  if (options.frames < 2) usage("--frames must be at least 2 (the first is timed apart)");
+  try {
+    if (compare[0]) return runCompare(compare[0], compare[1], tolerance);
+    return runBench(options);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "render_bench: %s\n", error.what());
+    return 1;
+  }
+}
