@@ -1,12 +1,14 @@
 // The softbake command.
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 
 #include "cli/bench_command.hpp"
 #include "cli/compare_command.hpp"
+#include "cli/export_command.hpp"
 #include "cli/run_command.hpp"
 #include "cli/scene_command.hpp"
 #include "core/collision/broad_phase.hpp"
@@ -61,7 +63,28 @@ void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
 struct RunCommandLine {
   softbake::RunOptions options;
   bool renderOn = false, renderOff = false;
+  bool noCache = false;
 };
+
+/// The command as typed, each word quoted for a POSIX shell where it needs it.
+std::string shellCommandLine(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    const std::string word = argv[i];
+    const bool plain = !word.empty() && word.find_first_not_of(
+                                            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                            "0123456789-_./=:,+@%") == std::string::npos;
+    if (!line.empty()) line += ' ';
+    if (plain) {
+      line += word;
+    } else {
+      line += '\'';
+      for (char c : word) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      line += '\'';
+    }
+  }
+  return line;
+}
 
 CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   softbake::RunOptions& run = line.options;
@@ -112,6 +135,9 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
   runApp->add_flag("--no-contact-spheres", run.noContactSpheres,
                    "render without the grey spheres at the contact points");
+  runApp->add_flag("--render-while-simulating", run.renderWhileSimulating,
+                   "render each frame as it is simulated, the camera framed on the first frame, "
+                   "instead of from the cache after the simulation, framed on the whole shot");
   runApp->add_flag("--vdb", run.vdb, "write OpenVDB level sets, velocity and contacts per frame");
   runApp
       ->add_option("--voxel-size", run.voxelSize,
@@ -133,8 +159,40 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "GiB on disk (estimated)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  CLI::Option* noCache = runApp->add_flag(
+      "--no-cache", line.noCache,
+      "write no simulation cache (OUT/cache): the run cannot be resumed or exported from");
+  runApp
+      ->add_option("--checkpoint-every", run.checkpointEvery,
+                   "frames between the cache's checkpoints (default: as many as keep them within "
+                   "a tenth of the cache)")
+      ->check(CLI::Range(1, 10000000))
+      ->excludes(noCache);
+  runApp->add_flag("--resume", run.resume,
+                   "continue the killed, interrupted or failed run in OUT from its last "
+                   "checkpoint, writing only the missing files; the same command and files, or "
+                   "an error that says what changed");
 
   return runApp;
+}
+
+CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
+  CLI::App* exportApp = app.add_subcommand(
+      "export",
+      "Write frames of a run again from its simulation cache (OUT/cache), without simulating: "
+      "the same files `run` writes for those frames, with the run's options. Outputs the run "
+      "did not ask for can be made this way, and frame ranges can go to different machines.");
+  exportApp->add_option("out", options.out, "the run's output folder (holding manifest.json)")
+      ->required();
+  exportApp->add_option("--frames", options.frames, "frames A:B, or A (default: all)");
+  exportApp->add_flag("--obj", options.obj, "write the OBJ sequence");
+  exportApp->add_flag("--vdb", options.vdb, "write the OpenVDB sequence");
+  exportApp->add_flag("--png", options.png, "render the PNG sequence");
+  exportApp->add_flag("--contacts", options.contacts, "write the contact JSON sequence");
+  exportApp->add_option("-j,--threads", options.threads, "worker threads (0: all cores)")
+      ->check(CLI::Range(0, 4096));
+  exportApp->add_flag("-q,--quiet", options.quiet, "print errors and the final summary only");
+  return exportApp;
 }
 
 CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
@@ -210,6 +268,9 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, which names the file, instead
+  // of killing the process mid-frame.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"softbake " SOFTBAKE_VERSION
                " - offline soft-body simulation (Matyka-Ollila pressure bodies, Mesit-Guha "
                "collisions) with OBJ sequence output",
@@ -223,6 +284,8 @@ int main(int argc, char** argv) {
   CLI::App* compareApp = addCompareCommand(app, compare);
   softbake::BenchOptions bench;
   CLI::App* benchApp = addBenchCommand(app, bench);
+  softbake::ExportOptions exportOptions;
+  CLI::App* exportApp = addExportCommand(app, exportOptions);
   softbake::SceneCommandOptions scene;
   CLI::App* sceneApp = softbake::addSceneCommand(app, scene);
 
@@ -236,8 +299,11 @@ int main(int argc, char** argv) {
   if (runApp->parsed()) {
     if (run.renderOn) run.options.render = true;
     if (run.renderOff) run.options.render = false;
+    run.options.cache = !run.noCache;
+    run.options.commandLine = shellCommandLine(argc, argv);
     return softbake::runCommand(run.options);
   }
+  if (exportApp->parsed()) return softbake::exportCommand(exportOptions);
   if (compareApp->parsed()) return softbake::compareCommand(compare);
   if (benchApp->parsed()) return softbake::benchCommand(bench);
   if (sceneApp->parsed()) return softbake::sceneCommand(scene);

@@ -9,8 +9,11 @@
 #include <system_error>
 
 #include "cli/command_errors.hpp"
+#include "cli/interruption.hpp"
 #include "cli/output_budget.hpp"
 #include "cli/progress_display.hpp"
+#include "cli/run_outputs.hpp"
+#include "cli/run_record.hpp"
 #include "cli/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
@@ -19,6 +22,9 @@
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
+#include "output/atomic_file.hpp"
+#include "output/cache_format.hpp"
+#include "output/cache_writer.hpp"
 #include "output/frame_pipeline.hpp"
 #include "output/manifest.hpp"
 #include "render/png_sequence_renderer.hpp"
@@ -28,57 +34,6 @@ namespace softbake {
 namespace {
 
 namespace fs = std::filesystem;
-
-void applyOverrides(const RunOptions& options, SceneFile& scene) {
-  applySimulationOverrides(options, scene.setup.settings);
-  if (options.framePadding) scene.output.framePadding = *options.framePadding;
-  if (options.contacts) scene.output.contacts = true;
-  if (options.render) scene.output.png = *options.render;
-  if (options.vdb) scene.output.vdb = true;
-}
-
-/// The scene's render settings, then the command line's.
-RenderOptions renderOptions(const RunOptions& options, const RenderSettings& scene) {
-  RenderOptions render;
-  render.width = scene.width.value_or(render.width);
-  render.height = scene.height.value_or(render.height);
-  render.samples = scene.samples.value_or(render.samples);
-  render.cameraPosition = scene.cameraPosition;
-  render.cameraTarget = scene.cameraTarget;
-  render.fovDegrees = scene.fovDegrees.value_or(render.fovDegrees);
-  render.contacts = scene.contactSpheres.value_or(render.contacts) && !options.noContactSpheres;
-  render.contactColor = scene.contactColor.value_or(render.contactColor);
-  render.contactRadius = scene.contactRadius.value_or(render.contactRadius);
-  render.wireframe = scene.wireframe.value_or(render.wireframe);
-  for (const std::optional<Vec3f>& color : scene.bodyColors)
-    render.bodyColors.push_back(color.value_or(Vec3f(-1, -1, -1)));
-  if (options.size) {
-    int width = 0, height = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(options.size->c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 ||
-        (x != 'x' && x != 'X') || width < 16 || height < 16 || width > 16384 || height > 16384)
-      throw Error(cat("--size: expected WIDTHxHEIGHT between 16x16 and 16384x16384, got '",
-                      *options.size, "'"));
-    render.width = width;
-    render.height = height;
-  }
-  return render;
-}
-
-VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology) {
-  VdbOptions vdb;
-  if (options.voxelSize) vdb.voxelSize = *options.voxelSize;
-  vdb.fog = options.vdbFog;
-  if (options.upAxis) vdb.upAxis = (*options.upAxis)[0];
-  if (options.vdbCompression)
-    vdb.compression = *options.vdbCompression == "blosc"  ? VdbOptions::Compression::Blosc
-                      : *options.vdbCompression == "none" ? VdbOptions::Compression::None
-                                                          : VdbOptions::Compression::Zip;
-  vdb.fps = topology.settings.fps;
-  vdb.units = topology.settings.units;
-  validate(vdb, topology);  // before anything is written
-  return vdb;
-}
 
 void describeSubsteps(const SubstepChoice& choice, IntegratorKind integrator) {
   const double boundMs = choice.boundTimeStep * 1e3, stepMs = choice.timeStep * 1e3;
@@ -110,19 +65,6 @@ void describeSubsteps(const SubstepChoice& choice, IntegratorKind integrator) {
     std::printf("substeps: %d per frame (time step %.4g ms, stability bound %.4g ms)\n",
                 choice.substeps, stepMs, boundMs);
   }
-}
-
-/// Removes frames a previous, longer run of the same scene left in `folder`, so the folder holds
-/// one consistent sequence.
-void removeStaleFrames(const fs::path& folder, const std::string& scene, const char* extension) {
-  std::error_code error;
-  if (!fs::is_directory(folder, error)) return;
-  const std::regex frameName(
-      std::regex_replace(scene, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") + "_[0-9]+\\" +
-      extension);
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder, error))
-    if (std::regex_match(entry.path().filename().string(), frameName))
-      fs::remove(entry.path(), error);
 }
 
 /// Surfaces that intersect at the start, per pair of bodies (or colliders) and per body with
@@ -172,46 +114,68 @@ void describeRun(const std::string& name, const Simulator& simulator) {
   describeInitialOverlaps(simulator);
 }
 
-/// Every writer the scene's output asks for, each sequence's stale frames of an earlier, longer
-/// run removed and the sequence listed in `manifest`.
-std::vector<std::unique_ptr<FrameSink>> openSinks(const RunOptions& options, const SceneFile& scene,
-                                                  const Simulator& simulator,
-                                                  const RenderOptions& render,
-                                                  const std::optional<VdbOptions>& vdb,
-                                                  Manifest& manifest) {
-  const std::shared_ptr<const SceneTopology>& topology = simulator.sharedTopology();
-  const std::string& name = scene.setup.name;
-  const int padding = scene.output.framePadding;
-  std::vector<std::unique_ptr<FrameSink>> sinks;
-  auto addSequence = [&](const char* folder, const char* extension, auto sink) {
-    removeStaleFrames(options.out / folder, name, extension);
-    manifest.sequences.push_back(sink->sequence());
-    sinks.push_back(std::move(sink));
-  };
-  if (scene.output.obj)
-    addSequence("obj", ".obj",
-                std::make_unique<ObjSequenceWriter>(topology, options.out, name, padding));
-  if (scene.output.contacts)
-    addSequence("contacts", ".json",
-                std::make_unique<ContactWriter>(*topology, options.out, name, padding));
-  if (vdb)
-    addSequence("vdb", ".vdb",
-                std::make_unique<VdbSequenceWriter>(*topology, options.out, name, *vdb, padding));
-  if (scene.output.png)
-    addSequence(
-        "png", ".png",
-        std::make_unique<PngSequenceRenderer>(topology, options.out, name, render, padding));
-  return sinks;
+/// What a run writes of each frame: a mask of its sinks per frame, all of them in a fresh run, only
+/// those whose file is missing in a resumed one.
+struct WritePlan {
+  std::vector<std::uint64_t> sinksPerFrame;  ///< [frame − 1]
+  int firstIncompleteFrame = 1;              ///< frames before it have every file; frames + 1: all
+};
+
+/// The plan for the files in `out` now: sequence `s` of `manifest` is sink `s`, and the cache
+/// sequence counts a checkpoint frame as written only with its checkpoint.
+WritePlan planWrites(const fs::path& out, const Manifest& manifest, int frames, bool everything,
+                     const std::optional<CacheLayout>& cache, int checkpointEvery) {
+  WritePlan plan;
+  plan.sinksPerFrame.assign(std::size_t(frames), 0);
+  plan.firstIncompleteFrame = frames + 1;
+  for (int frame = frames; frame >= 1; --frame) {
+    std::uint64_t& mask = plan.sinksPerFrame[std::size_t(frame - 1)];
+    for (std::size_t s = 0; s < manifest.sequences.size(); ++s) {
+      const OutputSequence& sequence = manifest.sequences[s];
+      std::error_code error;
+      bool written =
+          !everything &&
+          fs::exists(out / sequenceFilePath(sequence, manifest.framePadding, frame), error);
+      if (written && cache && sequence.format == "cache" &&
+          isCheckpointFrame(frame, checkpointEvery))
+        written = fs::exists(cache->checkpointPath(frame), error);
+      if (!written) mask |= std::uint64_t(1) << s;
+    }
+    if (mask != 0) plan.firstIncompleteFrame = frame;
+  }
+  return plan;
 }
 
-/// Simulates every frame and hands it to the writers; returns the contacts over all substeps.
-StepStats bake(Simulator& simulator, FramePipeline& pipeline, ProgressDisplay& progress) {
+struct BakeResult {
+  StepStats totals;
+  int framesWritten = 0;  ///< frames handed to the writers
+  int lastFrame = 0;      ///< the last frame simulated
+  int stoppedBy = 0;      ///< the signal that stopped the run early, or 0
+  std::string failure;    ///< why the simulation stopped (a blow-up); the frames before it stand
+};
+
+/// Simulates frames `firstFrame` + 1 … the last (the simulator starts at `firstFrame`) and hands
+/// the writers every frame the plan asks for; stops early, after a whole frame, when a signal asks
+/// or the simulation fails.
+BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int checkpointEvery,
+                std::optional<std::size_t> cacheSink, FramePipeline& pipeline,
+                ProgressDisplay& progress, const InterruptionGuard& interruption) {
   const SimulationState& state = simulator.state();
   const SimulationSettings& settings = simulator.topology().settings;
-  StepStats totals;
-  for (int frame = 1; frame <= settings.frames; ++frame) {
-    if (frame > 1) {
-      simulator.advanceToFrame(frame);
+  BakeResult result;
+  StepStats& totals = result.totals;
+  for (int frame = firstFrame; frame <= settings.frames; ++frame) {
+    if (interruption.signal() != 0) {
+      result.stoppedBy = interruption.signal();
+      break;
+    }
+    if (frame > firstFrame) {
+      try {
+        simulator.advanceToFrame(frame);
+      } catch (const Error& error) {
+        result.failure = error.what();
+        break;
+      }
       const StepStats& stats = simulator.lastFrameStats();
       totals.contacts += stats.contacts;
       totals.planeContacts += stats.planeContacts;
@@ -219,16 +183,77 @@ StepStats bake(Simulator& simulator, FramePipeline& pipeline, ProgressDisplay& p
       totals.responses.cornerResponses += stats.responses.cornerResponses;
       totals.responses.edgePushes += stats.responses.edgePushes;
     }
-    Frame& out = pipeline.acquire();
-    out.number = frame;
-    out.time = (frame - 1) / settings.fps;
-    std::copy(state.position.begin(), state.position.end(), out.positions.begin());
-    std::copy(state.velocity.begin(), state.velocity.end(), out.velocities.begin());
-    out.contacts = simulator.contacts();
-    pipeline.submit(out);
+    result.lastFrame = frame;
+    const std::uint64_t sinks = plan.sinksPerFrame[std::size_t(frame - 1)];
+    if (sinks != 0 && (frame > firstFrame || firstFrame == 1)) {
+      Frame& out = pipeline.acquire();
+      out.number = frame;
+      out.time = (frame - 1) / settings.fps;
+      std::copy(state.position.begin(), state.position.end(), out.positions.begin());
+      std::copy(state.velocity.begin(), state.velocity.end(), out.velocities.begin());
+      out.contacts = simulator.contacts();
+      out.sinkMask = sinks;
+      out.hasCheckpoint =
+          cacheSink && ((sinks >> *cacheSink) & 1) && isCheckpointFrame(frame, checkpointEvery);
+      if (out.hasCheckpoint) out.checkpoint = simulator.checkpoint();
+      // Every writer gets the numbers the cache keeps, so `export` later writes the same files.
+      roundToCachePrecision(out);
+      pipeline.submit(out);
+      ++result.framesWritten;
+    }
     progress.update(frame);
   }
-  return totals;
+  return result;
+}
+
+/// The checkpoint interval of `simulator`'s run: the command line's, or the one that keeps the
+/// checkpoints within a tenth of the cache.
+int checkpointInterval(const RunOptions& options, const Simulator& simulator) {
+  if (!options.cache) return 0;
+  if (options.checkpointEvery) return *options.checkpointEvery;
+  Frame initial;
+  initial.positions = simulator.state().position;
+  initial.velocities = simulator.state().velocity;
+  return defaultCheckpointInterval(encodeCheckpoint(simulator.checkpoint(), 1, 0).size(),
+                                   encodeCacheFrame(initial).size());
+}
+
+/// Where a resumed run starts: the manifest it continues must describe the same run, and the latest
+/// checkpoint before the first incomplete frame (or the scene itself) is restored into `simulator`.
+/// Returns the frame the simulator is at.
+int restoreForResume(const Manifest& manifest, const WritePlan& plan,
+                     const std::optional<CacheLayout>& cache, Simulator& simulator) {
+  if (plan.firstIncompleteFrame <= 2 || !cache) return 1;
+  std::vector<std::string> skipped;
+  const std::optional<DecodedCheckpoint> checkpoint =
+      cache->latestCheckpoint(plan.firstIncompleteFrame - 1, &skipped);
+  for (const std::string& reason : skipped)
+    std::fprintf(stderr, "warning: passing over a damaged checkpoint: %s\n", reason.c_str());
+  if (!checkpoint) return 1;
+  simulator.restore(checkpoint->checkpoint);
+  std::printf("resuming '%s' from the checkpoint of frame %d; frames %d to %d are missing files\n",
+              manifest.scene.c_str(), checkpoint->frame, plan.firstIncompleteFrame,
+              manifest.framesWritten);
+  return checkpoint->frame;
+}
+
+/// The manifest a resumed run continues: there must be one, of the same run.
+Manifest manifestToResume(const RunOptions& options, const nlohmann::ordered_json& record) {
+  Manifest previous;
+  try {
+    previous = readManifest(options.out);
+  } catch (const Error& error) {
+    throw Error(cat("--resume: ", error.what()));
+  }
+  const std::vector<std::string> differences = runRecordDifferences(previous.run, record);
+  if (!differences.empty()) {
+    std::string list;
+    for (const std::string& difference : differences) list += cat("\n  ", difference);
+    throw Error(cat("--resume: ", (options.out / "manifest.json").string(),
+                    " records another run; what changed:", list,
+                    "\nRun again without --resume to start over."));
+  }
+  return previous;
 }
 
 int run(const RunOptions& options) {
@@ -251,35 +276,168 @@ int run(const RunOptions& options) {
   describeRun(name, simulator);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(options, topology);
+  const int checkpointEvery = checkpointInterval(options, simulator);
+  const nlohmann::ordered_json record = runRecord(options, scene, checkpointEvery);
+  const int frames = topology.settings.frames;
+  std::optional<Manifest> previous;
+  if (options.resume) previous = manifestToResume(options, record);
+
+  // With the cache, PNG frames are rendered from it once the shot is simulated, the camera framed
+  // on all of it; without, or when asked, as the frames are simulated, framed on the first.
+  const bool renderAfter = scene.output.png && options.cache && !options.renderWhileSimulating;
+  if (scene.output.png && !options.cache && !options.renderWhileSimulating)
+    std::printf(
+        "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
+        "framed on the first frame\n");
 
   // Everything above validated the input: only now is anything written.
-  fs::create_directories(options.out);
-  fs::remove(options.out / "manifest.json");
-  const int frames = topology.settings.frames;
+  makeDirectories(options.out);
   Manifest manifest = describeScene(topology, name, frames, scene.output.framePadding);
-  FramePipeline pipeline(openSinks(options, scene, simulator, render, vdb, manifest),
-                         topology.particleCount());
+  manifest.run = record;
+  manifest.status = RunStatus::Incomplete;
+  manifest.reason = "in progress, or killed: continue it with --resume";
+  OutputOptions liveOutput = scene.output;
+  if (renderAfter) liveOutput.png = false;
+  std::vector<std::unique_ptr<FrameSink>> sinks =
+      openSinks(options, name, liveOutput, simulator.sharedTopology(), render, vdb, checkpointEvery,
+                options.resume, manifest);
+  std::optional<CacheLayout> cache;
+  std::optional<std::size_t> cacheSink;
+  if (options.cache) {
+    cache.emplace(options.out, name, scene.output.framePadding);
+    cacheSink = sinks.size() - 1;
+  }
+  // The PNG sequence is listed now, so a killed run's manifest names it too; its renderer is
+  // made once the shot's bounds are known.
+  Manifest rendered = manifest;
+  rendered.sequences.clear();
+  if (renderAfter) {
+    OutputOptions pngOnly;
+    pngOnly.obj = false;
+    pngOnly.png = true;
+    pngOnly.framePadding = scene.output.framePadding;
+    RunOptions noCache = options;
+    noCache.cache = false;
+    openSinks(noCache, name, pngOnly, simulator.sharedTopology(), render, vdb, 0, options.resume,
+              rendered);
+  }
+  Manifest everything = manifest;
+  everything.sequences.insert(everything.sequences.end(), rendered.sequences.begin(),
+                              rendered.sequences.end());
 
+  const WritePlan plan =
+      planWrites(options.out, manifest, frames, !options.resume, cache, checkpointEvery);
+  if (options.resume)
+    for (const OutputSequence& sequence : everything.sequences)
+      removeTemporaryFiles(options.out / fs::path(sequence.pattern).parent_path(), name);
+  const int firstFrame = plan.firstIncompleteFrame > frames
+                             ? frames + 1  // nothing is missing: nothing to simulate
+                             : restoreForResume(manifest, plan, cache, simulator);
+  everything.run = record;
+  everything.status = RunStatus::Incomplete;
+  everything.reason = manifest.reason;
+  everything.framesComplete =
+      planWrites(options.out, everything, frames, !options.resume, cache, checkpointEvery)
+          .firstIncompleteFrame -
+      1;
+  writeManifest(options.out, everything);
+
+  // From here a failure is recorded in the manifest, with how far the run got.
+  const auto recordEnd = [&](RunStatus status, std::string reason) {
+    everything.status = status;
+    everything.reason = std::move(reason);
+    everything.framesComplete =
+        planWrites(options.out, everything, frames, false, cache, checkpointEvery)
+            .firstIncompleteFrame -
+        1;
+    writeManifest(options.out, everything);
+  };
   std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
   ProgressDisplay progress(frames, options.quiet);
-  const StepStats totals = bake(simulator, pipeline, progress);
-  pipeline.finish();
+  BakeResult result;
+  std::uint64_t bytesWritten = 0;
+  const InterruptionGuard interruption;
+  try {
+    {
+      FramePipeline pipeline(std::move(sinks), topology.particleCount());
+      result = bake(simulator, firstFrame, plan, checkpointEvery, cacheSink, pipeline, progress,
+                    interruption);
+      pipeline.finish();
+      bytesWritten = pipeline.bytesWritten();
+    }
+    if (renderAfter && result.failure.empty() && result.stoppedBy == 0) {
+      progress.finish();
+      const WritePlan renderPlan =
+          planWrites(options.out, rendered, frames, !options.resume, std::nullopt, 0);
+      if (renderPlan.firstIncompleteFrame <= frames) {
+        RenderOptions framed = render;
+        framed.shotBounds = cache->shotBounds(frames);
+        OutputOptions pngOnly;
+        pngOnly.obj = false;
+        pngOnly.png = true;
+        pngOnly.framePadding = scene.output.framePadding;
+        RunOptions noCache = options;
+        noCache.cache = false;
+        Manifest unused;
+        FramePipeline pipeline(openSinks(noCache, name, pngOnly, simulator.sharedTopology(), framed,
+                                         vdb, 0, /*keepExisting=*/true, unused),
+                               topology.particleCount());
+        ProgressDisplay rendering(frames, options.quiet);
+        const int last = writeFromCache(*cache, 1, frames, renderPlan.sinksPerFrame, pipeline,
+                                        rendering, &interruption);
+        rendering.finish();
+        if (last < frames) {
+          result.stoppedBy = interruption.signal();
+          result.lastFrame = last;
+        }
+        bytesWritten += pipeline.bytesWritten();
+      }
+    }
+  } catch (const Error& error) {
+    progress.finish();
+    try {
+      recordEnd(RunStatus::Failed, error.what());
+    } catch (const Error&) {
+      // The first error is the one to report; the manifest stays as it was.
+    }
+    throw;
+  }
   progress.finish();
   const double seconds = progress.elapsedSeconds();
 
-  writeManifest(options.out, manifest);
+  if (!result.failure.empty()) {
+    recordEnd(RunStatus::Failed, result.failure);
+    throw Error(result.failure);
+  }
+  if (result.stoppedBy != 0) {
+    recordEnd(RunStatus::Incomplete, cat("interrupted by ", signalName(result.stoppedBy),
+                                         " after frame ", result.lastFrame));
+    std::fflush(stdout);
+    std::fprintf(stderr,
+                 "\nsoftbake: interrupted by %s after frame %d of %d; frames 1 to %d are "
+                 "complete. Continue with:\n  %s --resume\n",
+                 signalName(result.stoppedBy), result.lastFrame, frames, everything.framesComplete,
+                 options.commandLine.empty() ? "softbake run ..." : options.commandLine.c_str());
+    return interruptedExitCode(result.stoppedBy);
+  }
+  recordEnd(RunStatus::Complete, "");
+  manifest = everything;
 
   const double steps = double(simulator.stepsTaken());
-  std::printf("wrote %d frames (%s) to %s in %.2f s: %.1f frames/s, %.0f steps, %.0f steps/s\n",
-              frames, formatBytes(pipeline.bytesWritten()).c_str(), options.out.string().c_str(),
-              seconds, seconds > 0 ? frames / seconds : 0.0, steps,
-              seconds > 0 ? steps / seconds : 0.0);
+  if (options.resume)
+    std::printf("resumed: wrote %d missing frames (%s) to %s in %.2f s\n", result.framesWritten,
+                formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds);
+  else
+    std::printf("wrote %d frames (%s) to %s in %.2f s: %.1f frames/s, %.0f steps, %.0f steps/s\n",
+                frames, formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds,
+                seconds > 0 ? frames / seconds : 0.0, steps, seconds > 0 ? steps / seconds : 0.0);
   if (simulator.collides())
     std::printf(
         "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "
         "plane contacts %zu\n",
-        totals.contacts, totals.responses.particleResponses, totals.responses.cornerResponses,
-        totals.responses.edgePushes, totals.planeContacts);
+        result.totals.contacts, result.totals.responses.particleResponses,
+        result.totals.responses.cornerResponses, result.totals.responses.edgePushes,
+        result.totals.planeContacts);
   for (const OutputSequence& sequence : manifest.sequences)
     std::printf("%s sequence: %s\n", sequence.format.c_str(),
                 (options.out / sequence.pattern).string().c_str());

@@ -27,6 +27,14 @@ struct RunOptions : SimulationOverrides {
   int threads = 0;                            ///< 0: all cores
   bool quiet = false;
   double maxOutputGib = 1024;  ///< refuse runs whose frames would take more, roughly
+  bool cache = true;           ///< write the simulation cache to OUT/cache (--no-cache: off)
+  std::optional<int> checkpointEvery;  ///< frames between checkpoints; unset: ≤ 10% of the cache
+  bool resume = false;                 ///< continue the run whose manifest is in `out`
+  /// Render each PNG frame as it is simulated, the camera framed on the first frame, instead of
+  /// from the cache once the shot is simulated, framed on all of it.
+  bool renderWhileSimulating = false;
+  /// The command as typed, quoted for a shell: printed with --resume when a run is interrupted.
+  std::string commandLine;
 };
 
 /// Runs the job; returns the process exit code. Errors are printed, never thrown.

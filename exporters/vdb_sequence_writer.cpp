@@ -8,6 +8,7 @@
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/PointIndexGrid.h>
 #include <cmath>
+#include <fstream>
 #include <mutex>
 #include <set>
 
@@ -15,6 +16,7 @@
 #include "core/text.hpp"
 #include "exporters/mesh_level_set.hpp"
 #include "output/atomic_file.hpp"
+#include "output/file_digest.hpp"
 #include "output/finite_values.hpp"
 #include "output/version.hpp"
 
@@ -218,6 +220,45 @@ openvdb::GridBase::Ptr contactGrid(const std::vector<Contact>& frameContacts, ch
   return contacts;
 }
 
+/// OpenVDB stamps every file it writes with a random UUID, so the same frame written twice differs
+/// in 36 bytes; a resumed or exported run could not then reproduce a run's files. The UUID becomes
+/// one derived from the rest of the file instead (version 8, RFC 9562's custom kind): the same
+/// grids, the same bytes. Throws softbake::Error naming `path` when the header is not the one
+/// OpenVDB 10 writes.
+void stampContentUuid(const std::filesystem::path& temporary, const std::filesystem::path& path) {
+  // magic (8 bytes), file version, library major and minor (4 each), has-grid-offsets (1), then
+  // the UUID as 36 characters.
+  constexpr std::size_t kUuidOffset = 21, kUuidLength = 36;
+  std::string bytes;
+  {
+    std::ifstream in(temporary, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  if (bytes.size() < kUuidOffset + kUuidLength || bytes[kUuidOffset + 8] != '-' ||
+      bytes[kUuidOffset + 23] != '-')
+    throw Error(cat("cannot write '", path.string(),
+                    "': OpenVDB wrote a header without its UUID where softbake expects it"));
+  const std::string digest = sha256(std::string_view(bytes).substr(kUuidOffset + kUuidLength));
+  static constexpr char kHex[] = "0123456789abcdef";
+  char uuid[kUuidLength];
+  for (std::size_t i = 0, nibble = 0; i < kUuidLength; ++i) {
+    if (i == 8 || i == 13 || i == 18 || i == 23) {
+      uuid[i] = '-';
+      continue;
+    }
+    const std::uint8_t byte = std::uint8_t(digest[nibble / 2]);
+    uuid[i] = kHex[nibble % 2 == 0 ? byte >> 4 : byte & 15];
+    ++nibble;
+  }
+  uuid[14] = '8';                                      // the version
+  uuid[19] = kHex[8 | (std::uint8_t(digest[8]) & 3)];  // the RFC variant, 10xx
+  std::fstream out(temporary, std::ios::binary | std::ios::in | std::ios::out);
+  out.seekp(std::streamoff(kUuidOffset));
+  out.write(uuid, kUuidLength);
+  out.close();
+  if (!out) throw Error(cat("cannot write '", path.string(), "': rewriting its UUID failed"));
+}
+
 /// Writes `grids` to `path` under a temporary name and renames it, so readers never see a torn
 /// file. Returns the file's size.
 std::uintmax_t writeGridsAtomically(const std::filesystem::path& path,
@@ -235,6 +276,13 @@ std::uintmax_t writeGridsAtomically(const std::filesystem::path& path,
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
     throw Error(cat("cannot write '", path.string(), "': ", e.what()));
+  }
+  try {
+    stampContentUuid(temporary, path);
+  } catch (const Error&) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw;
   }
   std::error_code error;
   std::filesystem::rename(temporary, path, error);

@@ -29,7 +29,10 @@ std::string threeDigits(double x) {
 }  // namespace
 
 SceneFile sceneFromMeshFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
-  return sceneFromMeshes(importMeshFile(path, meshSceneImportOptions(options)), path, options);
+  SceneFile scene =
+      sceneFromMeshes(importMeshFile(path, meshSceneImportOptions(options)), path, options);
+  scene.inputFiles.push_back(path);
+  return scene;
 }
 
 MeshImportOptions meshSceneImportOptions(const SceneLoadOptions& options) {

@@ -183,6 +183,7 @@ class SceneParser {
       if (!std::filesystem::exists(resolved, error))
         value.fail(cat("mesh file not found: ", resolved.string()));
       ImportedMeshes imported;
+      scene_.inputFiles.push_back(resolved);
       try {
         imported = importMeshFile(resolved, importOptions(merge));
       } catch (const Error& importError) {
@@ -466,7 +467,9 @@ SceneFile parseSceneText(std::string_view text, std::string_view source,
 
 SceneFile loadSceneFile(const std::filesystem::path& path, const SceneLoadOptions& options) {
   const nlohmann::json json = readJsonFile(path);
-  return parseScene(json, path.string(), path.parent_path(), options);
+  SceneFile scene = parseScene(json, path.string(), path.parent_path(), options);
+  scene.inputFiles.insert(scene.inputFiles.begin(), path);
+  return scene;
 }
 
 std::string fileSafeSceneName(std::string name) {

@@ -46,6 +46,9 @@ struct SceneFile {
   RenderSettings render;
   std::vector<std::string> notes;     ///< what loading did that the user should hear about
   std::vector<std::string> warnings;  ///< what may be wrong with the meshes it read
+  /// The files loading read, as it found them: the scene file, then each mesh file. A run's
+  /// manifest records their SHA-256.
+  std::vector<std::filesystem::path> inputFiles;
 };
 
 /// How the command line asks scenes to be loaded; a scene file's `settings.import` adds to it.

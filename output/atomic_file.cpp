@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
+#include <cstdlib>
 #include <system_error>
 #include <vector>
 
@@ -66,14 +68,23 @@ int writeAll(int fd, std::span<const std::string_view> parts) {
   return 0;
 }
 
-}  // namespace
-
-void writeFileAtomically(const std::filesystem::path& path, std::string_view data) {
-  writeFileAtomically(path, std::span<const std::string_view>(&data, 1));
+/// The crash tests' hook: SOFTBAKE_TEST_KILL_BEFORE_RENAME=<file name> kills the process with
+/// SIGKILL once that file's data is written under its temporary name and before the rename, the
+/// worst moment for a kill, reached deterministically.
+void killHereIfAsked(const std::filesystem::path& path) {
+  static const char* const name = std::getenv("SOFTBAKE_TEST_KILL_BEFORE_RENAME");
+  if (name && path.filename() == name) ::kill(::getpid(), SIGKILL);
 }
 
-void writeFileAtomically(const std::filesystem::path& path,
-                         std::span<const std::string_view> parts) {
+}  // namespace
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view data,
+                         Durability durability) {
+  writeFileAtomically(path, std::span<const std::string_view>(&data, 1), durability);
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::span<const std::string_view> parts,
+                         Durability durability) {
   const std::filesystem::path temporary = temporaryPath(path);
   // O_EXCL: never write through a stale temporary that is a symlink planted by someone else.
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -81,11 +92,16 @@ void writeFileAtomically(const std::filesystem::path& path,
 
   int error = writeAll(fd, parts);
   const char* step = "write failed";
+  if (error == 0 && durability == Durability::PowerLoss && ::fsync(fd) != 0) {
+    error = errno;
+    step = "fsync failed";
+  }
   // close() reports delayed write errors on network file systems, so its result counts too.
   if (::close(fd) != 0 && error == 0) {
     error = errno;
     step = "close failed";
   }
+  if (error == 0) killHereIfAsked(path);
   if (error == 0 && ::rename(temporary.c_str(), path.c_str()) != 0) {
     error = errno;
     step = "rename failed";
@@ -93,6 +109,17 @@ void writeFileAtomically(const std::filesystem::path& path,
   if (error != 0) {
     ::unlink(temporary.c_str());
     fail(path, step, error);
+  }
+  if (durability == Durability::PowerLoss) {
+    // The rename lives in the directory: without this a power cut can bring the old name back.
+    const std::filesystem::path directory =
+        path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
+    const int directoryFd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (directoryFd < 0) fail(path, "cannot open its directory to fsync it", errno);
+    const int synced = ::fsync(directoryFd);
+    const int syncError = errno;
+    ::close(directoryFd);
+    if (synced != 0) fail(path, "fsync of its directory failed", syncError);
   }
 }
 

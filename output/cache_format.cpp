@@ -34,9 +34,6 @@ class ByteWriter {
     static_assert(std::is_trivially_copyable_v<T>);
     bytes_.append(reinterpret_cast<const char*>(&value), sizeof value);
   }
-  void putFloat3(const Vec3& v) {
-    for (int k = 0; k < 3; ++k) put(float(v[k]));
-  }
   void putVectors(const std::vector<Vec3>& vectors) {
     for (const Vec3& v : vectors)
       for (int k = 0; k < 3; ++k) put(v[k]);
@@ -92,8 +89,8 @@ struct Header {
   double time = 0;
 };
 
-/// The header for `payload`, then the payload.
-std::string withHeader(const Header& header, std::string_view payload) {
+/// The 64 header bytes for `payload`.
+std::string headerBytes(const Header& header, std::string_view payload) {
   ByteWriter out;
   out.bytes().append(kMagic, sizeof kMagic);
   out.put(kVersion);
@@ -107,8 +104,12 @@ std::string withHeader(const Header& header, std::string_view payload) {
   out.put(crc32Of(payload));
   out.put(crc32Of(std::string_view(out.bytes()).substr(0, kHeaderCrcBytes)));
   out.put(std::uint64_t(0));
-  out.bytes().append(payload);
   return std::move(out.bytes());
+}
+
+/// The header for `payload`, then the payload.
+std::string withHeader(const Header& header, std::string_view payload) {
+  return headerBytes(header, payload).append(payload);
 }
 
 /// Checks the header of `bytes` and returns it; the payload follows at kCacheHeaderBytes.
@@ -146,45 +147,73 @@ Header readHeader(std::string_view bytes, std::string_view name, std::uint32_t k
 
 }  // namespace
 
-std::string encodeCacheFrame(const Frame& frame) {
-  ByteWriter payload;
-  for (const Vec3& p : frame.positions) payload.putFloat3(p);
+void encodeCacheFrame(const Frame& frame, std::string& bytes) {
+  const std::size_t particles = frame.positions.size();
+  if (frame.velocities.size() != particles)
+    throw Error(cat("frame ", frame.number, ": ", frame.velocities.size(), " velocities for ",
+                    particles, " particles"));
+  // Sized once and filled in place: a frame of a million particles is 24 MB, so appending float
+  // by float would spend more time growing the string than writing the file.
+  bytes.resize(kCacheHeaderBytes + particles * 24 + frame.contacts.size() * kCacheContactBytes);
+  char* out = bytes.data() + kCacheHeaderBytes;
+  const auto put = [&out](auto value) {
+    std::memcpy(out, &value, sizeof value);
+    out += sizeof value;
+  };
+  const auto putVectors = [&](const std::vector<Vec3>& vectors) {
+    if constexpr (std::is_same_v<Scalar, float> && sizeof(Vec3) == 12) {
+      std::memcpy(out, vectors.data(), vectors.size() * 12);
+      out += vectors.size() * 12;
+    } else {
+      for (const Vec3& v : vectors)
+        for (int k = 0; k < 3; ++k) put(float(v[k]));
+    }
+  };
+  putVectors(frame.positions);
+  putVectors(frame.velocities);
   for (const Contact& contact : frame.contacts) {
-    payload.putFloat3(contact.position);
-    payload.putFloat3(contact.normal);
+    for (int k = 0; k < 3; ++k) put(float(contact.position[k]));
+    for (int k = 0; k < 3; ++k) put(float(contact.normal[k]));
     for (const Index index : {contact.surfaceA, contact.surfaceB, contact.triangleA,
                               contact.triangleB, contact.particle})
-      payload.put(std::uint32_t(index));
-    payload.put(std::uint8_t(contact.kind));
-    payload.bytes().append(3, '\0');
+      put(std::uint32_t(index));
+    put(std::uint8_t(contact.kind));
+    for (int zero = 0; zero < 3; ++zero) put(std::uint8_t(0));
   }
-  Header header{kFrameKind,
-                frame.number,
-                std::uint32_t(frame.positions.size()),
-                std::uint32_t(frame.contacts.size()),
-                std::uint32_t(sizeof(float)),
-                frame.time};
-  return withHeader(header, payload.bytes());
+  const Header header{kFrameKind,
+                      frame.number,
+                      std::uint32_t(particles),
+                      std::uint32_t(frame.contacts.size()),
+                      std::uint32_t(sizeof(float)),
+                      frame.time};
+  const std::string head = headerBytes(header, std::string_view(bytes).substr(kCacheHeaderBytes));
+  std::memcpy(bytes.data(), head.data(), kCacheHeaderBytes);
 }
 
-CachedFrame decodeCacheFrame(std::string_view bytes, std::string_view name) {
+std::string encodeCacheFrame(const Frame& frame) {
+  std::string bytes;
+  encodeCacheFrame(frame, bytes);
+  return bytes;
+}
+
+void decodeCacheFrame(std::string_view bytes, std::string_view name, Frame& frame) {
   const Header header = readHeader(bytes, name, kFrameKind);
-  const std::uint64_t expected = std::uint64_t(header.particles) * 3 * sizeof(float) +
+  const std::uint64_t expected = std::uint64_t(header.particles) * 6 * sizeof(float) +
                                  std::uint64_t(header.count) * kCacheContactBytes;
   if (header.scalarBytes != sizeof(float) || expected != bytes.size() - kCacheHeaderBytes)
     throw Error(cat(name, ": ", header.particles, " particles and ", header.count,
                     " contacts do not make the ", bytes.size() - kCacheHeaderBytes,
                     " bytes of data"));
   ByteReader in(bytes.substr(kCacheHeaderBytes), name);
-  CachedFrame frame;
   frame.number = header.frame;
   frame.time = header.time;
-  frame.positions.reserve(header.particles);
-  for (std::uint32_t i = 0; i < header.particles; ++i)
-    frame.positions.push_back(in.getFloat3("positions").cast<float>());
-  frame.contacts.reserve(header.count);
+  frame.positions.resize(header.particles);
+  for (Vec3& p : frame.positions) p = in.getFloat3("positions");
+  frame.velocities.resize(header.particles);
+  for (Vec3& v : frame.velocities) v = in.getFloat3("velocities");
+  frame.contacts.resize(header.count);
   for (std::uint32_t c = 0; c < header.count; ++c) {
-    Contact contact;
+    Contact& contact = frame.contacts[c];
     contact.position = in.getFloat3("contacts");
     contact.normal = in.getFloat3("contacts");
     contact.surfaceA = in.get<std::uint32_t>("contacts");
@@ -197,10 +226,26 @@ CachedFrame decodeCacheFrame(std::string_view bytes, std::string_view name) {
       throw Error(cat(name, ": contact ", c, " is of unknown kind ", int(kind)));
     contact.kind = ContactKind(kind);
     for (int zero = 0; zero < 3; ++zero) in.get<std::uint8_t>("contacts");
-    frame.contacts.push_back(contact);
   }
   in.expectEnd();
+}
+
+Frame decodeCacheFrame(std::string_view bytes, std::string_view name) {
+  Frame frame;
+  decodeCacheFrame(bytes, name, frame);
   return frame;
+}
+
+void roundToCachePrecision(Frame& frame) {
+  if constexpr (!std::is_same_v<Scalar, float>) {
+    const auto round = [](Vec3& v) { v = v.cast<float>().cast<Scalar>(); };
+    for (Vec3& p : frame.positions) round(p);
+    for (Vec3& v : frame.velocities) round(v);
+    for (Contact& contact : frame.contacts) {
+      round(contact.position);
+      round(contact.normal);
+    }
+  }
 }
 
 std::string encodeCheckpoint(const SimulationCheckpoint& checkpoint, int frame, double time) {

@@ -1,8 +1,9 @@
 #pragma once
-/// The simulation cache's two kinds of file, as bytes: a frame (positions as float32 in particle
-/// order, and that frame's contacts) and a checkpoint (SimulationCheckpoint, exact, to continue the
-/// run bit for bit). Files, their names and when they are written are the cache writer's; this
-/// only turns records into bytes and back, checking every byte on the way back.
+/// The simulation cache's two kinds of file, as bytes: a frame (positions and velocities as
+/// float32 in particle order, and that frame's contacts) and a checkpoint (SimulationCheckpoint,
+/// exact, to continue the run bit for bit). Files, their names and when they are written are the
+/// cache writer's; this only turns records into bytes and back, checking every byte on the way
+/// back.
 ///
 /// Every file is a 64-byte header followed by its payload, all little-endian:
 ///
@@ -14,16 +15,17 @@
 /// | 16     | int32     | frame number (1 is the initial state)                        |
 /// | 20     | uint32    | particles                                                    |
 /// | 24     | uint32    | frame: contacts; checkpoint: touching triangle pairs         |
-/// | 28     | uint32    | bytes per scalar of the payload's vectors (4, or 8 in a checkpoint of the
-/// double build) | | 32     | float64   | time, seconds | | 40     | uint64    | payload bytes | |
-/// 48     | uint32    | CRC-32 (zlib's) of the payload                               | | 52     |
-/// uint32    | CRC-32 of header bytes 0–51                                  | | 56     | uint64 |
-/// zero                                                         |
+/// | 28     | uint32    | bytes per scalar: 4 (8 in a double-precision build's checkpoint) |
+/// | 32     | float64   | time, seconds                                                |
+/// | 40     | uint64    | payload bytes                                                |
+/// | 48     | uint32    | CRC-32 (zlib's) of the payload                               |
+/// | 52     | uint32    | CRC-32 of header bytes 0–51                                  |
+/// | 56     | uint64    | zero                                                         |
 ///
-/// A frame's payload is `positions` (particles × 3 float32), then `contacts` (records of 48 bytes:
-/// position and normal, 3 float32 each; surface A, surface B, triangle A, triangle B, particle,
-/// uint32 each, 0xFFFFFFFF for none; kind, uint8: 0 edge–triangle, 1 particle–triangle, 2 corner;
-/// 3 zero bytes). With numpy alone:
+/// A frame's payload is `positions` (particles × 3 float32), `velocities` (the same, m/s: the VDB
+/// export's `vel` grids), then `contacts` (records of 48 bytes: position and normal, 3 float32
+/// each; surface A, surface B, triangle A, triangle B, particle, uint32 each, 0xFFFFFFFF for none;
+/// kind, uint8: 0 edge–triangle, 1 particle–triangle, 2 corner; 3 zero bytes). With numpy alone:
 ///
 ///     header = np.dtype([("magic", "S8"), ("version", "<u4"), ("kind", "<u4"), ("frame", "<i4"),
 ///                        ("particles", "<u4"), ("count", "<u4"), ("scalar_bytes", "<u4"),
@@ -35,7 +37,8 @@
 ///     data = open(path, "rb").read()
 ///     h = np.frombuffer(data, header, count=1)[0]
 ///     positions = np.frombuffer(data, "<f4", h["particles"] * 3, 64).reshape(-1, 3)
-///     contacts = np.frombuffer(data, contact, h["count"], 64 + 12 * int(h["particles"]))
+///     velocities = np.frombuffer(data, "<f4", h["particles"] * 3, 64 + 12 * int(h["particles"]))
+///     contacts = np.frombuffer(data, contact, h["count"], 64 + 24 * int(h["particles"]))
 ///
 /// A checkpoint's payload is positions, velocities and the implicit integrator's warm start
 /// (scalar_bytes each; the warm start's count is a uint32 before it: particles or 0), the plane
@@ -53,18 +56,19 @@ namespace softbake {
 inline constexpr std::size_t kCacheHeaderBytes = 64;
 inline constexpr std::size_t kCacheContactBytes = 48;
 
-/// A frame as the cache holds it: positions in float32.
-struct CachedFrame {
-  int number = 1;
-  double time = 0;
-  std::vector<Vec3f> positions;
-  std::vector<Contact> contacts;
-};
-
+/// `frame` as a cache file's bytes, into `bytes` (its memory reused from frame to frame). The
+/// simulation's numbers are float32 (the default build) and go in unchanged; a double build's are
+/// rounded, which is why every writer is fed the decoded frame (cacheRoundTrip()).
+void encodeCacheFrame(const Frame& frame, std::string& bytes);
 std::string encodeCacheFrame(const Frame& frame);
-/// Throws softbake::Error starting with `name` and saying what is wrong (not a cache file, another
-/// version or kind, a size that does not add up, a checksum that does not match).
-CachedFrame decodeCacheFrame(std::string_view bytes, std::string_view name);
+/// Reads a cache frame into `frame`, reusing its vectors' memory. Throws softbake::Error starting
+/// with `name` and saying what is wrong (not a cache file, another version or kind, a size that
+/// does not add up, a checksum that does not match).
+void decodeCacheFrame(std::string_view bytes, std::string_view name, Frame& frame);
+Frame decodeCacheFrame(std::string_view bytes, std::string_view name);
+/// Rounds `frame`'s numbers as the cache stores them (a no-op in the float32 build), so outputs
+/// written now equal the ones `softbake export` writes later from the cache.
+void roundToCachePrecision(Frame& frame);
 
 std::string encodeCheckpoint(const SimulationCheckpoint& checkpoint, int frame, double time);
 struct DecodedCheckpoint {

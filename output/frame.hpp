@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/collision/contact.hpp"
 #include "core/types.hpp"
 
@@ -15,6 +16,12 @@ struct Frame {
   std::vector<Vec3> positions;    ///< every particle of the scene, global order
   std::vector<Vec3> velocities;   ///< m/s, same order as positions (the VDB `vel` grids)
   std::vector<Contact> contacts;  ///< the contacts of the frame's last substep
+  /// Sinks that write this frame, by their index in the FramePipeline: a resumed run writes only
+  /// the files that are missing.
+  std::uint64_t sinkMask = ~std::uint64_t(0);
+  /// Set on the frames the simulation cache keeps a checkpoint of (its memory reused).
+  bool hasCheckpoint = false;
+  SimulationCheckpoint checkpoint;
 };
 
 /// A writer of frames, run on a thread of its own by FramePipeline. Implementations write each file

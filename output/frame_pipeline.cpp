@@ -22,10 +22,12 @@ FramePipeline::FramePipeline(std::vector<std::unique_ptr<FrameSink>> sinks,
   // Handed out lowest slot first, which makes runs easier to follow in a debugger.
   for (std::size_t slot = depth; slot-- > 0;) freeSlots_.push_back(slot);
 
+  if (sinks.size() > 64) throw Error("the frame pipeline takes at most 64 sinks");
   for (std::unique_ptr<FrameSink>& sink : sinks) {
     if (!sink) throw Error("the frame pipeline was given an empty sink");
     workers_.push_back(std::make_unique<Worker>());
     workers_.back()->sink = std::move(sink);
+    workers_.back()->index = workers_.size() - 1;
   }
   // Threads start last, once every member they read exists. A failed start must not leave
   // joinable threads behind: their destructors would terminate the program.
@@ -150,7 +152,7 @@ void FramePipeline::run(Worker& worker) {
     // The frame is read without the lock: the producer cannot touch it until this sink releases
     // it below, and other sinks only read it.
     try {
-      worker.sink->write(frames_[slot]);
+      if ((frames_[slot].sinkMask >> worker.index) & 1) worker.sink->write(frames_[slot]);
     } catch (...) {
       fail(worker, std::current_exception());
       return;

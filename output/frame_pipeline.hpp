@@ -49,7 +49,8 @@ class FramePipeline {
   std::size_t depth() const { return frames_.size(); }
   std::size_t sinkCount() const { return workers_.size(); }
   const FrameSink& sink(std::size_t index) const { return *workers_[index]->sink; }
-  /// Frames sink `index` has written so far. Safe to call from any thread.
+  /// Frames sink `index` has written (or skipped, by the frame's sinkMask) so far. Safe to call
+  /// from any thread.
   std::uint64_t framesWritten(std::size_t index) const;
   /// Bytes all sinks have written so far. Safe to call from any thread.
   std::uint64_t bytesWritten() const;
@@ -58,6 +59,7 @@ class FramePipeline {
   enum class SlotState { Free, Filling, Queued };
   struct Worker {
     std::unique_ptr<FrameSink> sink;
+    std::size_t index = 0;  ///< its bit in Frame::sinkMask
     std::thread thread;
     std::atomic<std::uint64_t> framesWritten{0};
   };

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/scene/scene_topology.hpp"
 
 namespace softbake {
@@ -19,6 +21,10 @@ struct OutputSequence {
   std::vector<std::string> files;  ///< written once beside the sequence: "obj/default.mtl"
 };
 
+/// The path, relative to the output directory, of `sequence`'s file for `frame`, its frame number
+/// padded to `padding` digits: "obj/default_0012.obj".
+std::string sequenceFilePath(const OutputSequence& sequence, int padding, int frame);
+
 struct ManifestBody {
   std::string name;
   std::size_t particles = 0;
@@ -27,15 +33,26 @@ struct ManifestBody {
   bool pressure = false;  ///< the gas pressure acts: closed and a non-zero pressure
 };
 
+/// Where a run stands. A run writes its manifest `incomplete` before its first frame, so a killed
+/// run leaves one that `--resume` reads; `complete` once every frame of every output is written.
+enum class RunStatus { Complete, Incomplete, Failed };
+std::string_view runStatusName(RunStatus status);
+
 struct Manifest {
   std::string scene;
+  RunStatus status = RunStatus::Complete;
+  std::string reason;      ///< why the run is incomplete or failed; empty when complete
+  int framesComplete = 0;  ///< frames 1..framesComplete have every output written
   double fps = 24;
-  int framesWritten = 0;
+  int framesWritten = 0;  ///< the run's frames: "frames" in the file
   int firstFrame = 1;
   int framePadding = 4;
   std::string units = "m";
   std::vector<ManifestBody> bodies;
   std::vector<OutputSequence> sequences;
+  /// What the run was made from and with (its input files' SHA-256, its options), as the command
+  /// records it for `--resume` and `export`; opaque here.
+  nlohmann::ordered_json run = nlohmann::ordered_json::object();
 };
 
 /// The scene, fps, units and bodies of `topology`; sequences are left for the caller to add.
@@ -44,6 +61,10 @@ Manifest describeScene(const SceneTopology& topology, std::string scene, int fra
 
 /// The JSON text, keys in a fixed order, ending in a newline.
 std::string manifestJson(const Manifest& manifest);
+
+/// Reads OUT/manifest.json. Throws softbake::Error naming the file and the key that is missing or
+/// of the wrong type.
+Manifest readManifest(const std::filesystem::path& outputDirectory);
 
 /// Writes OUT/manifest.json atomically. Throws softbake::Error naming the file when writing fails
 /// or the fps is not finite (then nothing is written).

@@ -129,7 +129,10 @@ RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
   const SceneTopology& topology = *scene.topology;
 
   Eigen::AlignedBox3f bounds;
-  for (const Vec3& p : topology.restPosition) bounds.extend(p.cast<float>());
+  if (options.shotBounds)
+    bounds = *options.shotBounds;
+  else
+    for (const Vec3& p : topology.restPosition) bounds.extend(p.cast<float>());
   for (const StaticMeshCollider& collider : topology.staticMeshes)
     for (const Vec3f& p : collider.mesh.positions) bounds.extend(p);
   if (!topology.planes.empty() && !bounds.isEmpty()) {

@@ -36,6 +36,10 @@ struct RenderOptions {
   bool wireframe = false;                       ///< draw the bodies' edges over their surfaces
   /// Per body, linear RGB 0..1; bodies without an entry (or with a negative red) take the palette.
   std::vector<Vec3f> bodyColors;
+  /// Where the bodies go over the whole shot (every frame's particles), when known: automatic
+  /// framing then covers all of it, so bodies that roll away stay in the picture. Unset: the
+  /// initial state's bounds and their shadow on the ground.
+  std::optional<Eigen::AlignedBox3f> shotBounds;
   EglOptions egl;
 };
 
@@ -50,11 +54,11 @@ struct RenderScene {
   float contactRadius = 0;                                     ///< m
 };
 
-/// Keeps `topology` and fixes the camera from its rest positions (the initial state). Automatic
-/// framing covers the bodies' initial bounds, the static meshes and the bodies' shadow on the first
-/// plane (where falling bodies end up), with a margin: frames arrive one by one, so the bounds of
-/// the whole animation are not known in advance, and a camera fitted per frame would jump. Throws
-/// softbake::Error for options out of range.
+/// Keeps `topology` and fixes the camera for the whole sequence, since a camera fitted per frame
+/// would jump. Automatic framing covers the bodies over the shot (options.shotBounds) or, when
+/// frames are rendered as they are simulated and the shot is not known yet, their initial bounds;
+/// then the static meshes and the bodies' shadow on the first plane (where falling bodies end
+/// up), with a margin. Throws softbake::Error for options out of range.
 RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> topology,
                             const RenderOptions& options);
 

@@ -24,7 +24,8 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev  # exporters (Debian's FindOpenVDB needs boost-iostreams)
   libegl-dev libgl-dev libopengl-dev   # render: the GL and EGL link libraries (FindOpenGL needs libOpenGL)
   libegl-mesa0 libgl1-mesa-dri libstb-dev  # render: EGL on Mesa's llvmpipe
-  zlib1g-dev                           # render: PNG deflate
+  zlib1g-dev                           # render: PNG deflate; output: the cache files' CRC-32
+  libssl-dev                           # output: SHA-256 of a run's input files, in its manifest
   libcli11-dev                         # cli
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)

@@ -94,7 +94,8 @@ TEST_F(RunFlags, FramePaddingSetsTheDigitsOfEveryFileName) {
     patterns.push_back(sequence.at("printf_pattern").get<std::string>());
   EXPECT_EQ(patterns,
             (std::vector<std::string>{"obj/default_%06d.obj", "contacts/default_%06d.json",
-                                      "vdb/default_%06d.vdb"}));
+                                      "vdb/default_%06d.vdb", "cache/default_%06d.sbframe"}));
+  EXPECT_TRUE(fs::exists(out / "cache/default_000002.sbframe"));
   EXPECT_NE(runSoftbake("run --frame-padding 10 -o " + quoted(folder_ / "bad")).exitCode, 0);
 }
 

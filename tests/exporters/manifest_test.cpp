@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
@@ -89,9 +91,41 @@ TEST(Manifest, IsByteIdenticalAcrossRunsAndKeepsKeyOrder) {
   }
   const std::string text = readFile(first.path() / "manifest.json");
   EXPECT_EQ(text, readFile(second.path() / "manifest.json"));
-  EXPECT_EQ(text.rfind("{\n  \"scene\": \"mixed\",\n  \"softbake_version\": ", 0), 0u) << text;
+  EXPECT_EQ(text.rfind("{\n  \"scene\": \"mixed\",\n  \"status\": \"complete\",\n  "
+                       "\"frames_complete\": 0,\n  \"softbake_version\": ",
+                       0),
+            0u)
+      << text;
   EXPECT_EQ(text.back(), '\n');
   EXPECT_NE(text.find("\"printf_pattern\": \"obj/mixed_%05d.obj\""), std::string::npos) << text;
+}
+
+TEST(Manifest, ReadsBackWhatItWrote) {
+  ScratchDirectory dir;
+  const auto world = makeMixedTopology();
+  Manifest manifest = describeScene(*world, "mixed", 10, 5);
+  manifest.status = RunStatus::Failed;
+  manifest.reason = "writer 'obj': disk full";
+  manifest.framesComplete = 7;
+  manifest.sequences.push_back(ObjSequenceWriter(world, dir.path(), "mixed", 5).sequence());
+  manifest.run = {{"input", "/abs/scene.json"}, {"options", {{"frames", 10}}}};
+  writeManifest(dir.path(), manifest);
+  const Manifest back = readManifest(dir.path());
+  EXPECT_EQ(manifestJson(back), manifestJson(manifest));
+  EXPECT_EQ(back.status, RunStatus::Failed);
+  EXPECT_EQ(back.framesComplete, 7);
+  EXPECT_EQ(sequenceFilePath(back.sequences[0], back.framePadding, 12), "obj/mixed_00012.obj");
+  EXPECT_EQ(sequenceFilePath(back.sequences[0], back.framePadding, 123456), "obj/mixed_123456.obj");
+
+  std::ofstream(dir.path() / "manifest.json") << R"({"scene": "x"})";
+  try {
+    readManifest(dir.path());
+    ADD_FAILURE() << "a manifest without its keys was read";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("manifest.json: 'status' is missing"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 TEST(Manifest, UnwritableDirectoryIsAnErrorNamingTheFile) {

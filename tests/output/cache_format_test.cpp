@@ -34,7 +34,7 @@ Frame sampleFrame() {
   frame.number = 37;
   frame.time = 1.5;
   frame.positions = {Vec3(0.25f, -1, 3.5f), Vec3(1e-3f, 2, -7), Vec3(0, 0, 0)};
-  frame.velocities = frame.positions;  // not cached
+  frame.velocities = {Vec3(-0.5f, 4, 0), Vec3(9, 8, 7), Vec3(0, 0, 1e6f)};
   Contact edge;
   edge.position = Vec3(1, 2, 3);
   edge.normal = Vec3(0, 1, 0);
@@ -48,12 +48,15 @@ Frame sampleFrame() {
 
 TEST(CacheFrame, ComesBackAsItWentIn) {
   const Frame frame = sampleFrame();
-  const CachedFrame back = decodeCacheFrame(encodeCacheFrame(frame), "f.sbcache");
+  const Frame back = decodeCacheFrame(encodeCacheFrame(frame), "f.sbcache");
   EXPECT_EQ(back.number, 37);
   EXPECT_EQ(back.time, 1.5);
   ASSERT_EQ(back.positions.size(), 3u);
-  for (std::size_t i = 0; i < 3; ++i)
-    EXPECT_EQ(back.positions[i], frame.positions[i].cast<float>()) << i;
+  ASSERT_EQ(back.velocities.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(back.positions[i], frame.positions[i]) << i;
+    EXPECT_EQ(back.velocities[i], frame.velocities[i]) << i;
+  }
   ASSERT_EQ(back.contacts.size(), 2u);
   for (std::size_t c = 0; c < 2; ++c) {
     const Contact &a = frame.contacts[c], &b = back.contacts[c];
@@ -70,7 +73,7 @@ TEST(CacheFrame, ComesBackAsItWentIn) {
 
 TEST(CacheFrame, HasTheDocumentedLayout) {
   const std::string bytes = encodeCacheFrame(sampleFrame());
-  ASSERT_EQ(bytes.size(), 64u + 3 * 12 + 2 * 48);
+  ASSERT_EQ(bytes.size(), 64u + 3 * 12 + 3 * 12 + 2 * 48);
   EXPECT_EQ(std::string(bytes.data(), 8), std::string("SBCACHE\0", 8));
   EXPECT_EQ(at<std::uint32_t>(bytes, 8), 1u);   // version
   EXPECT_EQ(at<std::uint32_t>(bytes, 12), 1u);  // a frame
@@ -83,10 +86,12 @@ TEST(CacheFrame, HasTheDocumentedLayout) {
   EXPECT_EQ(at<std::uint32_t>(bytes, 48), referenceCrc32(std::string_view(bytes).substr(64)));
   EXPECT_EQ(at<std::uint32_t>(bytes, 52), referenceCrc32(std::string_view(bytes).substr(0, 52)));
   EXPECT_EQ(at<std::uint64_t>(bytes, 56), 0u);
-  // Particle 1, then the second contact, a corner, field by field.
+  // Particle 1's position and velocity, then the second contact, a corner, field by field.
   EXPECT_EQ(at<float>(bytes, 64 + 12 + 0), 1e-3f);
   EXPECT_EQ(at<float>(bytes, 64 + 12 + 8), -7.0f);
-  const std::size_t corner = 64 + 3 * 12 + 48;
+  EXPECT_EQ(at<float>(bytes, 64 + 36 + 12 + 4), 8.0f);
+  EXPECT_EQ(at<float>(bytes, 64 + 36 + 24 + 8), 1e6f);
+  const std::size_t corner = 64 + 6 * 12 + 48;
   EXPECT_EQ(at<float>(bytes, corner + 8), 3.0f);                  // position z
   EXPECT_EQ(at<float>(bytes, corner + 16), 1.0f);                 // normal y
   EXPECT_EQ(at<std::uint32_t>(bytes, corner + 28), 1u);           // surface B
