@@ -41,8 +41,10 @@ FrameRange parseFrameRange(const std::string& text, int available) {
 }
 
 int exportFrames(const ExportOptions& options) {
-  if (!options.obj && !options.vdb && !options.png && !options.contacts)
-    throw Error("export: name the outputs to write: --obj, --vdb, --png and/or --contacts");
+  if (!options.obj && !options.vdb && !options.png && !options.contacts && !options.all)
+    throw Error(
+        "export: name the outputs to write: --obj, --vdb, --png, --contacts, or --all for those "
+        "the run asked for");
   std::optional<tbb::global_control> threadLimit;
   if (options.threads > 0)
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
@@ -66,16 +68,18 @@ int exportFrames(const ExportOptions& options) {
   }
   const FrameRange range = parseFrameRange(options.frames, manifest.framesWritten);
 
-  scene.output.obj = options.obj;
-  scene.output.contacts = options.contacts;
-  scene.output.png = options.png;
-  scene.output.vdb = options.vdb;
+  if (!options.all) {
+    scene.output.obj = options.obj;
+    scene.output.contacts = options.contacts;
+    scene.output.png = options.png;
+    scene.output.vdb = options.vdb;
+  }
   run.cache = false;  // read, not written
   const std::shared_ptr<const SceneTopology> topology =
       std::make_shared<const SceneTopology>(buildSceneTopology(scene.setup));
   const RenderOptions render = renderOptions(run, scene.render);
   std::optional<VdbOptions> vdb;
-  if (options.vdb) vdb = vdbOptions(run, *topology);
+  if (scene.output.vdb) vdb = vdbOptions(run, *topology);
   const CacheLayout cache(options.out, scene.setup.name, manifest.framePadding);
   for (int frame = range.first; frame <= range.last; ++frame) {
     std::error_code missing;
@@ -87,7 +91,7 @@ int exportFrames(const ExportOptions& options) {
 
   // As `run` rendered: framed on the whole shot, unless it rendered while simulating.
   RenderOptions framed = render;
-  if (options.png && !run.renderWhileSimulating)
+  if (scene.output.png && !run.renderWhileSimulating)
     framed.shotBounds = cache.shotBounds(manifest.framesWritten);
 
   Manifest exported = manifest;

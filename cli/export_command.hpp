@@ -13,7 +13,8 @@ struct ExportOptions {
   std::filesystem::path out;  ///< the run's output folder, holding manifest.json and cache/
   std::string frames;         ///< "A:B", "A" or empty for every frame of the cache
   bool obj = false, vdb = false, png = false, contacts = false;
-  int threads = 0;  ///< 0: all cores
+  bool all = false;  ///< every output the run's scene and options ask for
+  int threads = 0;   ///< 0: all cores
   bool quiet = false;
 };
 

@@ -1,16 +1,22 @@
 // The softbake command.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 
 #include "cli/bench_command.hpp"
+#include "cli/command_errors.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/export_command.hpp"
+#include "cli/farm_command.hpp"
 #include "cli/run_command.hpp"
 #include "cli/scene_command.hpp"
+#include "cli/shell_quote.hpp"
+#include "cli/verify_command.hpp"
+#include "cli/wedge.hpp"
 #include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 
@@ -69,20 +75,7 @@ struct RunCommandLine {
 /// The command as typed, each word quoted for a POSIX shell where it needs it.
 std::string shellCommandLine(int argc, char** argv) {
   std::string line;
-  for (int i = 0; i < argc; ++i) {
-    const std::string word = argv[i];
-    const bool plain = !word.empty() && word.find_first_not_of(
-                                            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                            "0123456789-_./=:,+@%") == std::string::npos;
-    if (!line.empty()) line += ' ';
-    if (plain) {
-      line += word;
-    } else {
-      line += '\'';
-      for (char c : word) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
-      line += '\'';
-    }
-  }
+  for (int i = 0; i < argc; ++i) line += (i ? " " : "") + softbake::shellQuoted(argv[i]);
   return line;
 }
 
@@ -168,6 +161,11 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "a tenth of the cache)")
       ->check(CLI::Range(1, 10000000))
       ->excludes(noCache);
+  runApp
+      ->add_flag("--cache-only", run.cacheOnly,
+                 "write the simulation cache alone; `export --all` writes the outputs later "
+                 "(how `farm` splits a bake)")
+      ->excludes(noCache);
   runApp->add_flag("--resume", run.resume,
                    "continue the killed, interrupted or failed run in OUT from its last "
                    "checkpoint, writing only the missing files; the same command and files, or "
@@ -189,10 +187,89 @@ CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
   exportApp->add_flag("--vdb", options.vdb, "write the OpenVDB sequence");
   exportApp->add_flag("--png", options.png, "render the PNG sequence");
   exportApp->add_flag("--contacts", options.contacts, "write the contact JSON sequence");
+  exportApp->add_flag("--all", options.all,
+                      "write every output the run's scene and options ask for");
   exportApp->add_option("-j,--threads", options.threads, "worker threads (0: all cores)")
       ->check(CLI::Range(0, 4096));
   exportApp->add_flag("-q,--quiet", options.quiet, "print errors and the final summary only");
   return exportApp;
+}
+
+/// The `run` options given after `--` to `wedge` and `farm`, read by `run`'s own parser so a
+/// mistake is reported before anything is written. Throws softbake::Error with CLI11's message.
+softbake::RunOptions parseRunArguments(const std::vector<std::string>& arguments) {
+  CLI::App app;
+  RunCommandLine line;
+  addRunCommand(app, line);
+  std::vector<std::string> words{"run", "wedge_scene.json"};
+  words.insert(words.end(), arguments.begin(), arguments.end());
+  std::reverse(words.begin(), words.end());  // CLI11 takes the arguments last first
+  try {
+    app.parse(words);
+  } catch (const CLI::ParseError& error) {
+    throw softbake::Error(std::string("the run options after --: ") + error.what());
+  }
+  if (line.renderOn) line.options.render = true;
+  if (line.renderOff) line.options.render = false;
+  return line.options;
+}
+
+CLI::App* addWedgeCommand(CLI::App& app, softbake::WedgeOptions& options) {
+  CLI::App* wedgeApp = app.add_subcommand(
+      "wedge",
+      "Bake every combination of some of a scene's keys: --vary bodies[0].material=rubber,jelly "
+      "--vary settings.fps=24,48 makes 4 variant scenes in OUT/wedge_000 … with a table of what "
+      "each sets (wedge.csv, wedge.md), and bakes them, several at once. Options after -- go to "
+      "every `softbake run`.");
+  wedgeApp->add_option("scene", options.input, "scene .json or built-in scene name")->required();
+  wedgeApp->add_option("--vary", options.vary, "KEY.PATH=VALUE1,VALUE2,... (repeatable)")
+      ->required()
+      ->allow_extra_args(false);
+  wedgeApp->add_option("-o,--out", options.out, "folder of the variants")->capture_default_str();
+  wedgeApp->add_option("--parallel", options.parallel, "variants baked at once (default: cores)")
+      ->check(CLI::Range(0, 4096));
+  wedgeApp->add_flag(
+      "--no-bake", [&options](std::int64_t) { options.bake = false; },
+      "write the variants and the table only");
+  wedgeApp->add_option("run_options", options.runArguments, "after --: options for `run`");
+  return wedgeApp;
+}
+
+CLI::App* addFarmCommand(CLI::App& app, softbake::FarmOptions& options) {
+  CLI::App* farm = app.add_subcommand(
+      "farm", "Split a bake over a render farm's scheduler: `farm slurm` writes sbatch scripts.");
+  farm->require_subcommand(1);
+  CLI::App* slurm = farm->add_subcommand(
+      "slurm",
+      "Write Slurm sbatch scripts for SCENE (and its wedge): one simulation job per variant "
+      "(`run --cache-only`), an array job per variant over chunks of frames that exports and "
+      "renders them from the cache (afterok on its simulation), and a job that verifies every "
+      "frame. Options after -- go to every `softbake run`.");
+  slurm->add_option("scene", options.input, "scene .json or built-in scene name")->required();
+  slurm->add_option("-o,--out", options.out, "output folder, on a file system all nodes share")
+      ->capture_default_str();
+  slurm->add_option("--vary", options.vary, "KEY.PATH=VALUE1,VALUE2,... as for `wedge`")
+      ->allow_extra_args(false);
+  slurm->add_option("--chunk", options.chunk, "frames per export task")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000000));
+  slurm->add_option("--partition", options.partition, "Slurm partition of every job");
+  slurm->add_option("--cpus-per-task", options.cpusPerTask, "CPUs of every job, and its threads")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
+  slurm->add_flag("--submit", options.submit, "submit the jobs with sbatch and print their ids");
+  slurm->add_option("run_options", options.runArguments, "after --: options for `run`");
+  return farm;
+}
+
+CLI::App* addVerifyCommand(CLI::App& app, softbake::VerifyOptions& options) {
+  CLI::App* verify = app.add_subcommand(
+      "verify",
+      "Check a run's folder: every frame of every sequence its manifest lists there exactly "
+      "once, whole and readable (cache frames by their checksums). Exit 0 when whole, 1 with "
+      "every problem listed.");
+  verify->add_option("out", options.out, "the run's output folder")->required();
+  return verify;
 }
 
 CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
@@ -286,6 +363,12 @@ int main(int argc, char** argv) {
   CLI::App* benchApp = addBenchCommand(app, bench);
   softbake::ExportOptions exportOptions;
   CLI::App* exportApp = addExportCommand(app, exportOptions);
+  softbake::WedgeOptions wedge;
+  CLI::App* wedgeApp = addWedgeCommand(app, wedge);
+  softbake::FarmOptions farm;
+  CLI::App* farmApp = addFarmCommand(app, farm);
+  softbake::VerifyOptions verify;
+  CLI::App* verifyApp = addVerifyCommand(app, verify);
   softbake::SceneCommandOptions scene;
   CLI::App* sceneApp = softbake::addSceneCommand(app, scene);
 
@@ -304,6 +387,20 @@ int main(int argc, char** argv) {
     return softbake::runCommand(run.options);
   }
   if (exportApp->parsed()) return softbake::exportCommand(exportOptions);
+  if (wedgeApp->parsed() || farmApp->parsed()) {
+    const std::vector<std::string>& extra =
+        wedgeApp->parsed() ? wedge.runArguments : farm.runArguments;
+    softbake::RunOptions parsed;
+    const int status = softbake::reportingErrors([&] {
+      parsed = parseRunArguments(extra);
+      return 0;
+    });
+    if (status != 0) return status;
+    if (wedgeApp->parsed()) return softbake::wedgeCommand(wedge);
+    farm.run = parsed;
+    return softbake::farmSlurmCommand(farm);
+  }
+  if (verifyApp->parsed()) return softbake::verifyCommand(verify);
   if (compareApp->parsed()) return softbake::compareCommand(compare);
   if (benchApp->parsed()) return softbake::benchCommand(bench);
   if (sceneApp->parsed()) return softbake::sceneCommand(scene);

@@ -284,7 +284,10 @@ int run(const RunOptions& options) {
 
   // With the cache, PNG frames are rendered from it once the shot is simulated, the camera framed
   // on all of it; without, or when asked, as the frames are simulated, framed on the first.
-  const bool renderAfter = scene.output.png && options.cache && !options.renderWhileSimulating;
+  if (options.cacheOnly && !options.cache)
+    throw Error("--cache-only and --no-cache leave nothing to write");
+  const bool renderAfter =
+      scene.output.png && options.cache && !options.renderWhileSimulating && !options.cacheOnly;
   if (scene.output.png && !options.cache && !options.renderWhileSimulating)
     std::printf(
         "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
@@ -298,6 +301,8 @@ int run(const RunOptions& options) {
   manifest.reason = "in progress, or killed: continue it with --resume";
   OutputOptions liveOutput = scene.output;
   if (renderAfter) liveOutput.png = false;
+  if (options.cacheOnly)
+    liveOutput.obj = liveOutput.contacts = liveOutput.png = liveOutput.vdb = false;
   std::vector<std::unique_ptr<FrameSink>> sinks =
       openSinks(options, name, liveOutput, simulator.sharedTopology(), render, vdb, checkpointEvery,
                 options.resume, manifest);

@@ -28,6 +28,8 @@ struct RunOptions : SimulationOverrides {
   bool quiet = false;
   double maxOutputGib = 1024;  ///< refuse runs whose frames would take more, roughly
   bool cache = true;           ///< write the simulation cache to OUT/cache (--no-cache: off)
+  /// Write the cache and nothing else; `export --all` writes the outputs later (a farm's split).
+  bool cacheOnly = false;
   std::optional<int> checkpointEvery;  ///< frames between checkpoints; unset: ≤ 10% of the cache
   bool resume = false;                 ///< continue the run whose manifest is in `out`
   /// Render each PNG frame as it is simulated, the camera framed on the first frame, instead of

@@ -35,6 +35,7 @@ void eachRecordedOption(Options& options, Visit&& visit) {
   visit("size", options.size);
   visit("no-contact-spheres", options.noContactSpheres);
   visit("render-while-simulating", options.renderWhileSimulating);
+  visit("cache-only", options.cacheOnly);
   visit("vdb", options.vdb);
   visit("voxel-size", options.voxelSize);
   visit("vdb-fog", options.vdbFog);

@@ -34,7 +34,8 @@ nlohmann::json sceneFileJson(const fs::path& path) {
   return json;
 }
 
-/// The JSON of `input`: a file of that name wins over a built-in scene, as for `run` and `bench`.
+}  // namespace
+
 nlohmann::json resolveSceneJson(const std::string& input) {
   std::error_code error;
   if (fs::exists(input, error)) return sceneFileJson(input);
@@ -43,8 +44,6 @@ nlohmann::json resolveSceneJson(const std::string& input) {
   for (const std::string& name : benchSceneNames()) names += (names.empty() ? "" : ", ") + name;
   throw Error(cat(input, ": no such file, and not a built-in scene (", names, ")"));
 }
-
-}  // namespace
 
 CLI::App* addSceneCommand(CLI::App& app, SceneCommandOptions& options) {
   CLI::App* sceneApp = app.add_subcommand(

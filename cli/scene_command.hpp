@@ -7,6 +7,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace CLI {
 class App;
 }
@@ -16,6 +18,10 @@ namespace softbake {
 struct SceneCommandOptions {
   std::string input;  ///< built-in scene name or scene .json file
 };
+
+/// The JSON of `input`, a scene .json file (checked by loading it) or a built-in scene name; a
+/// file of that name wins, as for `run`. Throws softbake::Error naming the input.
+nlohmann::json resolveSceneJson(const std::string& input);
 
 /// Adds the `scene` subcommand to `app`, filling `options` when it is parsed.
 CLI::App* addSceneCommand(CLI::App& app, SceneCommandOptions& options);
