@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "cli/command_errors.hpp"
+#include "cli/run_outputs.hpp"
 #include "cli/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
@@ -18,6 +19,7 @@
 #include "exporters/obj_sequence_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "output/atomic_file.hpp"
+#include "output/cache_writer.hpp"
 #include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
@@ -95,10 +97,14 @@ struct StepRecord {
   double simulationSeconds = 0;
 };
 
-/// The OBJ, VDB and PNG writers, each timed on the bench thread.
+/// The simulation cache's writer (frames and checkpoints, fsync'ed), then the OBJ, VDB and PNG
+/// writers, each timed on the bench thread.
 std::vector<ExportTiming> openExports(const Simulator& simulator, const fs::path& folder,
-                                      const std::string& name) {
+                                      const std::string& name, int checkpointEvery) {
   std::vector<ExportTiming> exports;
+  exports.push_back(
+      {std::make_unique<CacheWriter>(folder, name, 4, simulator.topology().settings.frames,
+                                     checkpointEvery, simulator.topology().particleCount())});
   exports.push_back(
       {std::make_unique<ObjSequenceWriter>(simulator.sharedTopology(), folder, name)});
   VdbOptions vdb;
@@ -114,7 +120,7 @@ std::vector<ExportTiming> openExports(const Simulator& simulator, const fs::path
 /// substep, every export writes it.
 StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
                             std::optional<std::size_t> stepLimit,
-                            std::vector<ExportTiming>& exports) {
+                            std::vector<ExportTiming>& exports, int checkpointEvery) {
   const double fps = simulator.topology().settings.fps;
   StepRecord record;
   const std::size_t expected =
@@ -157,6 +163,8 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       frame.positions = simulator.state().position;
       frame.velocities = simulator.state().velocity;
       frame.contacts = simulator.contacts();
+      frame.hasCheckpoint = isCheckpointFrame(frameNumber, checkpointEvery);
+      if (frame.hasCheckpoint) frame.checkpoint = simulator.checkpoint();
       for (ExportTiming& e : exports) {
         const Clock::time_point exportStart = Clock::now();
         e.sink->write(frame);
@@ -287,9 +295,12 @@ int bench(const BenchOptions& options) {
     std::fflush(stdout);
 
     std::vector<ExportTiming> exports;
-    if (options.withExports) exports = openExports(simulator, exportFolder, scene.setup.name);
+    const int checkpointEvery = defaultCheckpointEvery(simulator);
+    if (options.withExports)
+      exports = openExports(simulator, exportFolder, scene.setup.name, checkpointEvery);
     for (long s = 0; s < options.warmupSteps; ++s) simulator.step(1);
-    const StepRecord record = runMeasuredSteps(simulator, settings.frames, stepLimit, exports);
+    const StepRecord record =
+        runMeasuredSteps(simulator, settings.frames, stepLimit, exports, checkpointEvery);
     const std::size_t steps = record.times.size();
 
     const Spread step = printStages(record);

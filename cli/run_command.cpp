@@ -206,16 +206,10 @@ BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int
   return result;
 }
 
-/// The checkpoint interval of `simulator`'s run: the command line's, or the one that keeps the
-/// checkpoints within a tenth of the cache.
+/// The checkpoint interval of `simulator`'s run: the command line's, or the default.
 int checkpointInterval(const RunOptions& options, const Simulator& simulator) {
   if (!options.cache) return 0;
-  if (options.checkpointEvery) return *options.checkpointEvery;
-  Frame initial;
-  initial.positions = simulator.state().position;
-  initial.velocities = simulator.state().velocity;
-  return defaultCheckpointInterval(encodeCheckpoint(simulator.checkpoint(), 1, 0).size(),
-                                   encodeCacheFrame(initial).size());
+  return options.checkpointEvery ? *options.checkpointEvery : defaultCheckpointEvery(simulator);
 }
 
 /// Where a resumed run starts: the manifest it continues must describe the same run, and the latest

@@ -124,6 +124,14 @@ std::vector<std::unique_ptr<FrameSink>> openSinks(
   return sinks;
 }
 
+int defaultCheckpointEvery(const Simulator& simulator) {
+  Frame initial;
+  initial.positions = simulator.state().position;
+  initial.velocities = simulator.state().velocity;
+  return defaultCheckpointInterval(encodeCheckpoint(simulator.checkpoint(), 1, 0).size(),
+                                   encodeCacheFrame(initial).size());
+}
+
 int writeFromCache(const CacheLayout& cache, int first, int last,
                    const std::vector<std::uint64_t>& sinksPerFrame, FramePipeline& pipeline,
                    ProgressDisplay& progress, const InterruptionGuard* interruption) {

@@ -11,6 +11,7 @@
 #include "cli/interruption.hpp"
 #include "cli/progress_display.hpp"
 #include "cli/run_command.hpp"
+#include "core/simulator.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
 #include "output/cache_writer.hpp"
@@ -50,6 +51,10 @@ std::vector<std::unique_ptr<FrameSink>> openSinks(
     const std::shared_ptr<const SceneTopology>& topology, const RenderOptions& render,
     const std::optional<VdbOptions>& vdb, int checkpointEvery, bool keepExisting,
     Manifest& manifest);
+
+/// The checkpoint interval that keeps `simulator`'s checkpoints within a tenth of its cache,
+/// from the sizes of a checkpoint and a frame record of its state now.
+int defaultCheckpointEvery(const Simulator& simulator);
 
 /// Feeds frames `first`…`last` from `cache` to `pipeline`, each to the sinks its entry of
 /// `sinksPerFrame` ([frame − 1]; empty: all) names, then finishes the pipeline; stops early, after
