@@ -42,33 +42,11 @@ constexpr int kWarmUpSubsteps = 8;
 /// (with the timer paused), so the state stays one a real run could reach.
 constexpr int kRestorePeriod = 64;
 
-/// Rubber balls of radius 0.5 m on a grid, 2 cm into the ground plane: about 2% of the particles
-/// are in contact from the first substep on.
-SceneSetup ballsScene(const SceneSize& size) {
-  const std::optional<Material> rubber = findMaterialPreset("rubber");
-  if (!rubber) throw std::runtime_error("no 'rubber' material preset");
-  SceneSetup scene;
-  scene.name = "bench";
-  constexpr float kRadius = 0.5f, kSpacing = 1.2f;
-  for (int i = 0; i < size.balls; ++i) {
-    BodySetup body;
-    body.name = "ball" + std::to_string(i);
-    body.mesh =
-        makeIcosphere(size.subdivisions, kRadius,
-                      Vec3f(kSpacing * float(i % 4), kRadius - 0.02f, kSpacing * float(i / 4)));
-    body.material = *rubber;
-    body.mass = 1;
-    scene.bodies.push_back(std::move(body));
-  }
-  scene.planes.push_back(PlaneCollider{});
-  return scene;
-}
-
 /// The warmed-up simulator of each size, built once per process and copied by each benchmark.
 const Simulator& preparedSimulator(int faces) {
   static std::map<int, Simulator> cache;
   if (auto it = cache.find(faces); it != cache.end()) return it->second;
-  Simulator simulator(buildSceneTopology(ballsScene(bench::sceneSize(faces))));
+  Simulator simulator(buildSceneTopology(bench::ballsScene(bench::sceneSize(faces))));
   if (simulator.topology().triangles.size() != std::size_t(faces))
     throw std::runtime_error("scene has " + std::to_string(simulator.topology().triangles.size()) +
                              " faces, not " + std::to_string(faces));

@@ -82,28 +82,6 @@ int toInt(const char* text, const char* flag) {
   return int(value);
 }
 
-/// bench/core_stages_bench.cpp's scene: rubber balls of radius 0.5 m on a grid, 2 cm into the
-/// ground plane.
-SceneSetup ballsScene(const bench::SceneSize& size) {
-  const std::optional<Material> rubber = findMaterialPreset("rubber");
-  if (!rubber) throw Error("no 'rubber' material preset");
-  SceneSetup scene;
-  scene.name = "render_bench";
-  constexpr float kRadius = 0.5f, kSpacing = 1.2f;
-  for (int i = 0; i < size.balls; ++i) {
-    BodySetup body;
-    body.name = "ball" + std::to_string(i);
-    body.mesh =
-        makeIcosphere(size.subdivisions, kRadius,
-                      Vec3f(kSpacing * float(i % 4), kRadius - 0.02f, kSpacing * float(i / 4)));
-    body.material = *rubber;
-    body.mass = 1;
-    scene.bodies.push_back(std::move(body));
-  }
-  scene.planes.push_back(PlaneCollider{});
-  return scene;
-}
-
 /// Frame `number` (1-based): the rest state with every ball squashed towards the ground by up to
 /// 10% and widened to match, a cycle of 16 frames. Multiplications only, so the same on every
 /// machine: the images of two machines differ only where their renderers do.
@@ -156,7 +134,8 @@ std::string token(std::string text) {
 int runBench(const Options& options) {
   const bench::SceneSize& size = bench::sceneSize(options.faces);
   const Clock::time_point buildStart = Clock::now();
-  auto topology = std::make_shared<const SceneTopology>(buildSceneTopology(ballsScene(size)));
+  auto topology = std::make_shared<const SceneTopology>(
+      buildSceneTopology(bench::ballsScene(size, "render_bench")));
   const double buildMs = msSince(buildStart);
 
   RenderOptions render;

@@ -306,20 +306,22 @@ int run(const RunOptions& options) {
     cache.emplace(options.out, name, scene.output.framePadding);
     cacheSink = sinks.size() - 1;
   }
-  // The PNG sequence is listed now, so a killed run's manifest names it too; its renderer is
-  // made once the shot's bounds are known.
-  Manifest rendered = manifest;
-  rendered.sequences.clear();
-  if (renderAfter) {
+  // Rendering from the cache after the simulation: the PNG writer alone.
+  const auto openRenderer = [&](const RenderOptions& framing, bool keepExisting, Manifest& listed) {
     OutputOptions pngOnly;
     pngOnly.obj = false;
     pngOnly.png = true;
     pngOnly.framePadding = scene.output.framePadding;
     RunOptions noCache = options;
     noCache.cache = false;
-    openSinks(noCache, name, pngOnly, simulator.sharedTopology(), render, vdb, 0, options.resume,
-              rendered);
-  }
+    return openSinks(noCache, name, pngOnly, simulator.sharedTopology(), framing, vdb, 0,
+                     keepExisting, listed);
+  };
+  // The PNG sequence is listed now, so a killed run's manifest names it too; its renderer is
+  // made once the shot's bounds are known.
+  Manifest rendered = manifest;
+  rendered.sequences.clear();
+  if (renderAfter) openRenderer(render, options.resume, rendered);
   Manifest everything = manifest;
   everything.sequences.insert(everything.sequences.end(), rendered.sequences.begin(),
                               rendered.sequences.end());
