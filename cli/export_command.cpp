@@ -41,9 +41,11 @@ FrameRange parseFrameRange(const std::string& text, int available) {
 }
 
 int exportFrames(const ExportOptions& options) {
-  if (!options.obj && !options.vdb && !options.png && !options.contacts && !options.all)
+  if (!options.obj && !options.vdb && !options.png && !options.contacts && !options.pc2 &&
+      !options.mdd && !options.all)
     throw Error(
-        "export: name the outputs to write: --obj, --vdb, --png, --contacts, or --all for those "
+        "export: name the outputs to write: --obj, --vdb, --png, --contacts, --pc2, --mdd, or "
+        "--all for those "
         "the run asked for");
   std::optional<tbb::global_control> threadLimit;
   if (options.threads > 0)
@@ -73,7 +75,15 @@ int exportFrames(const ExportOptions& options) {
     scene.output.contacts = options.contacts;
     scene.output.png = options.png;
     scene.output.vdb = options.vdb;
+    scene.output.pc2 = options.pc2;
+    scene.output.mdd = options.mdd;
   }
+  const bool pointCaches = scene.output.pc2 || scene.output.mdd;
+  if (pointCaches && !options.frames.empty() &&
+      parseFrameRange(options.frames, manifest.framesWritten).first != 1)
+    throw Error(
+        "export: point caches hold every frame: export --pc2 and --mdd without --frames, "
+        "or from frame 1");
   run.cache = false;  // read, not written
   const std::shared_ptr<const SceneTopology> topology =
       std::make_shared<const SceneTopology>(buildSceneTopology(scene.setup));
@@ -96,11 +106,18 @@ int exportFrames(const ExportOptions& options) {
 
   Manifest exported = manifest;
   exported.sequences.clear();
-  FramePipeline pipeline(openSinks(run, scene.setup.name, scene.output, topology, framed, vdb,
-                                   checkpointEvery, /*keepExisting=*/true, exported),
-                         topology->particleCount());
-  ProgressDisplay progress(range.last - range.first + 1, options.quiet);
-  writeFromCache(cache, range.first, range.last, {}, pipeline, progress);
+  std::vector<std::unique_ptr<FrameSink>> sinks =
+      openSinks(run, scene.setup.name, scene.output, topology, framed, vdb, checkpointEvery,
+                /*keepExisting=*/true, exported);
+  const char upAxis = run.upAxis ? (*run.upAxis)[0] : 'y';
+  for (std::unique_ptr<FrameSink>& writer : openPointCacheWriters(
+           scene.setup.name, scene.output, topology, options.out, upAxis, exported))
+    sinks.push_back(std::move(writer));
+  // Point caches take every frame, in order.
+  const FrameRange fed = pointCaches ? FrameRange{1, manifest.framesWritten} : range;
+  FramePipeline pipeline(std::move(sinks), topology->particleCount());
+  ProgressDisplay progress(fed.last - fed.first + 1, options.quiet);
+  writeFromCache(cache, fed.first, fed.last, {}, pipeline, progress);
   progress.finish();
 
   // The manifest lists the sequences export added, so tools that read it find them.
@@ -108,6 +125,20 @@ int exportFrames(const ExportOptions& options) {
     if (std::none_of(manifest.sequences.begin(), manifest.sequences.end(),
                      [&](const OutputSequence& s) { return s.format == sequence.format; }))
       manifest.sequences.push_back(sequence);
+  if (pointCaches) {
+    // Merge per body: an export of MDD keeps the PC2 files a run listed, and the other way round.
+    if (manifest.pointCaches.size() != exported.pointCaches.size())
+      manifest.pointCaches = exported.pointCaches;
+    for (std::size_t b = 0; b < exported.pointCaches.size(); ++b) {
+      if (!exported.pointCaches[b].pc2.empty())
+        manifest.pointCaches[b].pc2 = exported.pointCaches[b].pc2;
+      if (!exported.pointCaches[b].mdd.empty())
+        manifest.pointCaches[b].mdd = exported.pointCaches[b].mdd;
+      manifest.pointCaches[b].body = exported.pointCaches[b].body;
+      manifest.pointCaches[b].restMesh = exported.pointCaches[b].restMesh;
+    }
+    manifest.pointCacheUp = exported.pointCacheUp;
+  }
   writeManifest(options.out, manifest);
   std::printf("exported frames %d to %d (%s) from %s in %.2f s\n", range.first, range.last,
               formatBytes(pipeline.bytesWritten()).c_str(), cache.directory().string().c_str(),

@@ -12,7 +12,7 @@ namespace softbake {
 struct ExportOptions {
   std::filesystem::path out;  ///< the run's output folder, holding manifest.json and cache/
   std::string frames;         ///< "A:B", "A" or empty for every frame of the cache
-  bool obj = false, vdb = false, png = false, contacts = false;
+  bool obj = false, vdb = false, png = false, contacts = false, pc2 = false, mdd = false;
   bool all = false;  ///< every output the run's scene and options ask for
   int threads = 0;   ///< 0: all cores
   bool quiet = false;

@@ -132,6 +132,10 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "render each frame as it is simulated, the camera framed on the first frame, "
                    "instead of from the cache after the simulation, framed on the whole shot");
   runApp->add_flag("--vdb", run.vdb, "write OpenVDB level sets, velocity and contacts per frame");
+  runApp->add_flag("--pc2", run.pc2,
+                   "write a PC2 point cache per body (OUT/pc2) and its rest mesh (OUT/cache_mesh): "
+                   "Blender's Mesh Cache and 3ds Max's Point Cache modifiers play them");
+  runApp->add_flag("--mdd", run.mdd, "write an MDD point cache per body (OUT/mdd), as --pc2");
   runApp
       ->add_option("--voxel-size", run.voxelSize,
                    "VDB voxel size in scene units (default: half the mean edge length)")
@@ -187,6 +191,8 @@ CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
   exportApp->add_flag("--vdb", options.vdb, "write the OpenVDB sequence");
   exportApp->add_flag("--png", options.png, "render the PNG sequence");
   exportApp->add_flag("--contacts", options.contacts, "write the contact JSON sequence");
+  exportApp->add_flag("--pc2", options.pc2, "write the PC2 point caches (every frame)");
+  exportApp->add_flag("--mdd", options.mdd, "write the MDD point caches (every frame)");
   exportApp->add_flag("--all", options.all,
                       "write every output the run's scene and options ask for");
   exportApp->add_option("-j,--threads", options.threads, "worker threads (0: all cores)")

@@ -277,15 +277,17 @@ int run(const RunOptions& options) {
   if (options.resume) previous = manifestToResume(options, record);
 
   // With the cache, PNG frames are rendered from it once the shot is simulated, the camera framed
-  // on all of it; without, or when asked, as the frames are simulated, framed on the first.
+  // on all of it, and the point caches, which need every frame in order, are written from it too;
+  // without, or when asked, as the frames are simulated.
   if (options.cacheOnly && !options.cache)
     throw Error("--cache-only and --no-cache leave nothing to write");
-  const bool renderAfter =
-      scene.output.png && options.cache && !options.renderWhileSimulating && !options.cacheOnly;
+  const bool afterFromCache = options.cache && !options.cacheOnly;
+  const bool renderAfter = scene.output.png && afterFromCache && !options.renderWhileSimulating;
   if (scene.output.png && !options.cache && !options.renderWhileSimulating)
     std::printf(
         "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
         "framed on the first frame\n");
+  const char upAxis = options.upAxis ? (*options.upAxis)[0] : 'y';
 
   // Everything above validated the input: only now is anything written.
   makeDirectories(options.out);
@@ -296,7 +298,8 @@ int run(const RunOptions& options) {
   OutputOptions liveOutput = scene.output;
   if (renderAfter) liveOutput.png = false;
   if (options.cacheOnly)
-    liveOutput.obj = liveOutput.contacts = liveOutput.png = liveOutput.vdb = false;
+    liveOutput.obj = liveOutput.contacts = liveOutput.png = liveOutput.vdb = liveOutput.pc2 =
+        liveOutput.mdd = false;
   std::vector<std::unique_ptr<FrameSink>> sinks =
       openSinks(options, name, liveOutput, simulator.sharedTopology(), render, vdb, checkpointEvery,
                 options.resume, manifest);
@@ -306,6 +309,10 @@ int run(const RunOptions& options) {
     cache.emplace(options.out, name, scene.output.framePadding);
     cacheSink = sinks.size() - 1;
   }
+  std::vector<std::unique_ptr<FrameSink>> pointCaches = openPointCacheWriters(
+      name, liveOutput, simulator.sharedTopology(), options.out, upAxis, manifest);
+  const bool pointCachesNeeded =
+      !pointCaches.empty() && (!options.resume || !pointCachesWritten(options.out, manifest));
   // Rendering from the cache after the simulation: the PNG writer alone.
   const auto openRenderer = [&](const RenderOptions& framing, bool keepExisting, Manifest& listed) {
     OutputOptions pngOnly;
@@ -326,8 +333,17 @@ int run(const RunOptions& options) {
   everything.sequences.insert(everything.sequences.end(), rendered.sequences.begin(),
                               rendered.sequences.end());
 
-  const WritePlan plan =
+  WritePlan plan =
       planWrites(options.out, manifest, frames, !options.resume, cache, checkpointEvery);
+  if (!afterFromCache && pointCachesNeeded) {
+    // Written live: they take every frame, from the first (without a cache a run starts there).
+    for (std::unique_ptr<FrameSink>& writer : pointCaches) {
+      const std::uint64_t bit = std::uint64_t(1) << sinks.size();
+      for (std::uint64_t& mask : plan.sinksPerFrame) mask |= bit;
+      sinks.push_back(std::move(writer));
+    }
+    plan.firstIncompleteFrame = 1;
+  }
   if (options.resume)
     for (const OutputSequence& sequence : everything.sequences)
       removeTemporaryFiles(options.out / fs::path(sequence.pattern).parent_path(), name);
@@ -366,27 +382,32 @@ int run(const RunOptions& options) {
       pipeline.finish();
       bytesWritten = pipeline.bytesWritten();
     }
-    if (renderAfter && result.failure.empty() && result.stoppedBy == 0) {
+    if (afterFromCache && result.failure.empty() && result.stoppedBy == 0) {
       progress.finish();
-      const WritePlan renderPlan =
-          planWrites(options.out, rendered, frames, !options.resume, std::nullopt, 0);
-      if (renderPlan.firstIncompleteFrame <= frames) {
-        RenderOptions framed = render;
-        framed.shotBounds = cache->shotBounds(frames);
-        OutputOptions pngOnly;
-        pngOnly.obj = false;
-        pngOnly.png = true;
-        pngOnly.framePadding = scene.output.framePadding;
-        RunOptions noCache = options;
-        noCache.cache = false;
-        Manifest unused;
-        FramePipeline pipeline(openSinks(noCache, name, pngOnly, simulator.sharedTopology(), framed,
-                                         vdb, 0, /*keepExisting=*/true, unused),
-                               topology.particleCount());
-        ProgressDisplay rendering(frames, options.quiet);
-        const int last = writeFromCache(*cache, 1, frames, renderPlan.sinksPerFrame, pipeline,
-                                        rendering, &interruption);
-        rendering.finish();
+      std::vector<std::unique_ptr<FrameSink>> after;
+      std::vector<std::uint64_t> masks(std::size_t(frames), 0);
+      if (renderAfter) {
+        const WritePlan renderPlan =
+            planWrites(options.out, rendered, frames, !options.resume, std::nullopt, 0);
+        if (renderPlan.firstIncompleteFrame <= frames) {
+          RenderOptions framed = render;
+          framed.shotBounds = cache->shotBounds(frames);
+          Manifest unused;
+          after = openRenderer(framed, /*keepExisting=*/true, unused);
+          masks = renderPlan.sinksPerFrame;
+        }
+      }
+      if (pointCachesNeeded)
+        for (std::unique_ptr<FrameSink>& writer : pointCaches) {
+          const std::uint64_t bit = std::uint64_t(1) << after.size();
+          for (std::uint64_t& mask : masks) mask |= bit;
+          after.push_back(std::move(writer));
+        }
+      if (!after.empty()) {
+        FramePipeline pipeline(std::move(after), topology.particleCount());
+        ProgressDisplay writing(frames, options.quiet);
+        const int last = writeFromCache(*cache, 1, frames, masks, pipeline, writing, &interruption);
+        writing.finish();
         if (last < frames) {
           result.stoppedBy = interruption.signal();
           result.lastFrame = last;

@@ -20,6 +20,8 @@ struct RunOptions : SimulationOverrides {
   std::optional<std::string> size;  ///< "1280x720"
   bool noContactSpheres = false;    ///< render without the contact spheres
   bool vdb = false;                 ///< write OUT/vdb/<scene>_0001.vdb …
+  bool pc2 = false;                 ///< write OUT/pc2/<scene>_<body>.pc2 and the rest meshes
+  bool mdd = false;                 ///< write OUT/mdd/<scene>_<body>.mdd and the rest meshes
   std::optional<double> voxelSize;
   bool vdbFog = false;
   std::optional<std::string> upAxis;          ///< "y" or "z", for the VDB export

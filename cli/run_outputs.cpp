@@ -8,6 +8,7 @@
 #include "core/text.hpp"
 #include "exporters/contact_writer.hpp"
 #include "exporters/obj_sequence_writer.hpp"
+#include "exporters/point_cache_writer.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "render/png_sequence_renderer.hpp"
 
@@ -21,6 +22,8 @@ void applyOverrides(const RunOptions& options, SceneFile& scene) {
   if (options.contacts) scene.output.contacts = true;
   if (options.render) scene.output.png = *options.render;
   if (options.vdb) scene.output.vdb = true;
+  if (options.pc2) scene.output.pc2 = true;
+  if (options.mdd) scene.output.mdd = true;
 }
 
 RenderOptions renderOptions(const RunOptions& options, const RenderSettings& scene) {
@@ -122,6 +125,40 @@ std::vector<std::unique_ptr<FrameSink>> openSinks(
                 std::make_unique<CacheWriter>(options.out, name, padding, topology->settings.frames,
                                               checkpointEvery, topology->particleCount()));
   return sinks;
+}
+
+std::vector<std::unique_ptr<FrameSink>> openPointCacheWriters(
+    const std::string& name, const OutputOptions& output,
+    const std::shared_ptr<const SceneTopology>& topology, const fs::path& out, char upAxis,
+    Manifest& manifest) {
+  std::vector<std::unique_ptr<FrameSink>> sinks;
+  manifest.pointCaches.clear();
+  if (!output.pc2 && !output.mdd) return sinks;
+  writeRestMeshes(*topology, out, name, upAxis);
+  manifest.pointCacheUp = std::string(1, upAxis);
+  for (const PointCacheFormat format : {PointCacheFormat::Pc2, PointCacheFormat::Mdd}) {
+    if (!(format == PointCacheFormat::Pc2 ? output.pc2 : output.mdd)) continue;
+    auto writer = std::make_unique<PointCacheWriter>(
+        topology, out, name, format, topology->settings.frames, topology->settings.fps, upAxis);
+    const std::vector<PointCacheFiles> files = writer->files();
+    manifest.pointCaches.resize(files.size());
+    for (std::size_t b = 0; b < files.size(); ++b) {
+      ManifestPointCache& entry = manifest.pointCaches[b];
+      entry.body = files[b].body;
+      entry.restMesh = files[b].restMesh;
+      (format == PointCacheFormat::Pc2 ? entry.pc2 : entry.mdd) = files[b].cache;
+    }
+    sinks.push_back(std::move(writer));
+  }
+  return sinks;
+}
+
+bool pointCachesWritten(const fs::path& out, const Manifest& manifest) {
+  std::error_code error;
+  for (const ManifestPointCache& entry : manifest.pointCaches)
+    for (const std::string* file : {&entry.restMesh, &entry.pc2, &entry.mdd})
+      if (!file->empty() && !fs::exists(out / *file, error)) return false;
+  return true;
 }
 
 int defaultCheckpointEvery(const Simulator& simulator) {

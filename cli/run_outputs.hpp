@@ -52,6 +52,16 @@ std::vector<std::unique_ptr<FrameSink>> openSinks(
     const std::optional<VdbOptions>& vdb, int checkpointEvery, bool keepExisting,
     Manifest& manifest);
 
+/// The PC2 and MDD writers `output` asks for, each body's rest mesh written now (OUT/cache_mesh),
+/// their files listed in `manifest.pointCaches`. `upAxis` is the --up option ('y' or 'z').
+std::vector<std::unique_ptr<FrameSink>> openPointCacheWriters(
+    const std::string& name, const OutputOptions& output,
+    const std::shared_ptr<const SceneTopology>& topology, const std::filesystem::path& out,
+    char upAxis, Manifest& manifest);
+
+/// Whether every file `manifest` lists for its point caches is in `out`.
+bool pointCachesWritten(const std::filesystem::path& out, const Manifest& manifest);
+
 /// The checkpoint interval that keeps `simulator`'s checkpoints within a tenth of its cache,
 /// from the sizes of a checkpoint and a frame record of its state now.
 int defaultCheckpointEvery(const Simulator& simulator);

@@ -37,6 +37,8 @@ void eachRecordedOption(Options& options, Visit&& visit) {
   visit("render-while-simulating", options.renderWhileSimulating);
   visit("cache-only", options.cacheOnly);
   visit("vdb", options.vdb);
+  visit("pc2", options.pc2);
+  visit("mdd", options.mdd);
   visit("voxel-size", options.voxelSize);
   visit("vdb-fog", options.vdbFog);
   visit("up", options.upAxis);

@@ -428,13 +428,16 @@ class SceneParser {
   }
 
   void parseOutput(const JsonValue& value) {
-    const JsonObject object = value.object({"frame_padding", "obj", "contacts", "png", "vdb"});
+    const JsonObject object =
+        value.object({"frame_padding", "obj", "contacts", "png", "vdb", "pc2", "mdd"});
     if (auto padding = object.find("frame_padding"))
       scene_.output.framePadding = int(padding->integerIn(1, 9));
     if (auto obj = object.find("obj")) scene_.output.obj = obj->boolean();
     if (auto contacts = object.find("contacts")) scene_.output.contacts = contacts->boolean();
     if (auto png = object.find("png")) scene_.output.png = png->boolean();
     if (auto vdb = object.find("vdb")) scene_.output.vdb = vdb->boolean();
+    if (auto pc2 = object.find("pc2")) scene_.output.pc2 = pc2->boolean();
+    if (auto mdd = object.find("mdd")) scene_.output.mdd = mdd->boolean();
   }
 
   std::string_view source_;

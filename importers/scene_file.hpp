@@ -24,6 +24,8 @@ struct OutputOptions {
   bool contacts = false;  ///< write each frame's contacts as JSON
   bool png = false;       ///< render each frame to PNG
   bool vdb = false;       ///< write each frame as OpenVDB grids
+  bool pc2 = false;       ///< write a PC2 point cache and a rest mesh per body
+  bool mdd = false;       ///< write an MDD point cache and a rest mesh per body
 };
 
 /// How the scene asks to be rendered; unset values keep the renderer's defaults. Plain values, so

@@ -61,6 +61,13 @@ std::string manifestJson(const Manifest& manifest) {
                       {"triangles", body.triangles},
                       {"closed", body.closed},
                       {"pressure", body.pressure}});
+  Json pointCaches = Json::array();
+  for (const ManifestPointCache& cache : manifest.pointCaches) {
+    Json entry = {{"body", cache.body}, {"mesh", cache.restMesh}, {"up", manifest.pointCacheUp}};
+    entry["pc2"] = cache.pc2.empty() ? Json(nullptr) : Json(cache.pc2);
+    entry["mdd"] = cache.mdd.empty() ? Json(nullptr) : Json(cache.mdd);
+    pointCaches.push_back(std::move(entry));
+  }
   Json sequences = Json::array();
   for (const OutputSequence& sequence : manifest.sequences)
     sequences.push_back({{"format", sequence.format},
@@ -78,6 +85,7 @@ std::string manifestJson(const Manifest& manifest) {
                    {"units", manifest.units},
                    {"bodies", std::move(bodies)},
                    {"sequences", std::move(sequences)},
+                   {"point_caches", std::move(pointCaches)},
                    {"run", manifest.run}});
   // Names come from user files; invalid UTF-8 is replaced rather than failing the whole run.
   return json.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
@@ -129,6 +137,15 @@ Manifest readManifest(const std::filesystem::path& outputDirectory) {
                                     sequence.at("pattern").get<std::string>(),
                                     sequence.at("printf_pattern").get<std::string>(),
                                     sequence.at("files").get<std::vector<std::string>>()});
+    if (json.contains("point_caches"))
+      for (const auto& cache : json["point_caches"]) {
+        const auto text = [&](const char* key) {
+          return cache.contains(key) && cache[key].is_string() ? cache[key].get<std::string>()
+                                                               : std::string();
+        };
+        manifest.pointCaches.push_back({text("body"), text("mesh"), text("pc2"), text("mdd")});
+        manifest.pointCacheUp = cache.value("up", std::string("y"));
+      }
     manifest.run = field("run");
   } catch (const nlohmann::json::exception& error) {
     throw Error(cat(path.string(), ": ", error.what()));

@@ -25,6 +25,14 @@ struct OutputSequence {
 /// padded to `padding` digits: "obj/default_0012.obj".
 std::string sequenceFilePath(const OutputSequence& sequence, int padding, int frame);
 
+/// A body's point caches: its rest mesh and the PC2 and MDD files that animate it, relative to the
+/// output directory; empty where not written.
+struct ManifestPointCache {
+  std::string body;
+  std::string restMesh;
+  std::string pc2, mdd;
+};
+
 struct ManifestBody {
   std::string name;
   std::size_t particles = 0;
@@ -50,6 +58,8 @@ struct Manifest {
   std::string units = "m";
   std::vector<ManifestBody> bodies;
   std::vector<OutputSequence> sequences;
+  std::vector<ManifestPointCache> pointCaches;
+  std::string pointCacheUp = "y";  ///< the axis the point caches and rest meshes hold as up
   /// What the run was made from and with (its input files' SHA-256, its options), as the command
   /// records it for `--resume` and `export`; opaque here.
   nlohmann::ordered_json run = nlohmann::ordered_json::object();

@@ -30,6 +30,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
+  pybind11-dev python3-dev             # python/: the module softbake, for Debian's python3 (3.11)
+  python3-numpy python3-pytest         # python/: its arrays, and its tests (ctest python_tests)
 )
 if $fuzz_tools; then
   # libFuzzer ships in clang's runtime package; llvm gives llvm-symbolizer, so a finding's stack
