@@ -72,6 +72,32 @@ struct RunCommandLine {
   bool noCache = false;
 };
 
+/// Of `words`, the one fewest single-character edits from `typed`, if it is within 2 (or a third of
+/// its length); empty otherwise.
+std::string nearestWord(const std::string& typed, const std::vector<std::string>& words) {
+  std::string best;
+  std::size_t bestDistance = std::max<std::size_t>(2, typed.size() / 3) + 1;
+  for (const std::string& word : words) {
+    std::vector<std::size_t> row(word.size() + 1);
+    for (std::size_t j = 0; j <= word.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= typed.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= word.size(); ++j) {
+        const std::size_t above = row[j];
+        row[j] = std::min(
+            {row[j] + 1, row[j - 1] + 1, diagonal + (typed[i - 1] == word[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    if (row[word.size()] < bestDistance) {
+      bestDistance = row[word.size()];
+      best = word;
+    }
+  }
+  return best;
+}
+
 /// The command as typed, each word quoted for a POSIX shell where it needs it.
 std::string shellCommandLine(int argc, char** argv) {
   std::string line;
@@ -359,6 +385,11 @@ int main(int argc, char** argv) {
                "collisions) with OBJ sequence output",
                "softbake"};
   app.set_version_flag("--version", std::string("softbake ") + SOFTBAKE_VERSION);
+  app.footer(
+      "Exit status: 0 done; 1 bad input (a file, key, flag or value; the message says which); 2 "
+      "the simulation failed (it blew up); 3 an output could not be written (a full disk, a "
+      "folder that cannot be made); 130 or 143 interrupted by SIGINT or SIGTERM (continue with "
+      "`softbake run ... --resume`). `compare` has its own: 0 same, 1 different, 2 bad input.");
   app.require_subcommand(1);
 
   RunCommandLine run;
@@ -381,9 +412,20 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    // Bad usage of `compare` is bad input: exit 2, as its contract says; CLI11 exits 106 and so on.
+    // A misspelt command gets the nearest one named; CLI11 only says one is required.
+    std::vector<std::string> names;
+    for (const CLI::App* command : app.get_subcommands({})) names.push_back(command->get_name());
+    if (argc > 1 && argv[1][0] != '-' &&
+        std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+      const std::string nearest = nearestWord(argv[1], names);
+      std::fprintf(stderr, "softbake: no command '%s'%s; the commands are %s (softbake --help)\n",
+                   argv[1], nearest.empty() ? "" : ("; did you mean '" + nearest + "'?").c_str(),
+                   CLI::detail::join(names, ", ").c_str());
+      return softbake::kExitBadInput;
+    }
+    // Bad usage is bad input: exit 1 (`compare`: 2, as its own contract says), not CLI11's 105-109.
     const int code = app.exit(error);
-    return code == 0 ? 0 : (compareApp->parsed() ? 2 : code);
+    return code == 0 ? 0 : (compareApp->parsed() ? 2 : softbake::kExitBadInput);
   }
   if (runApp->parsed()) {
     if (run.renderOn) run.options.render = true;

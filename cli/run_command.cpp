@@ -429,7 +429,7 @@ int run(const RunOptions& options) {
 
   if (!result.failure.empty()) {
     recordEnd(RunStatus::Failed, result.failure);
-    throw Error(result.failure);
+    throw SimulationFailure(result.failure);
   }
   if (result.stoppedBy != 0) {
     recordEnd(RunStatus::Incomplete, cat("interrupted by ", signalName(result.stoppedBy),

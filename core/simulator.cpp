@@ -208,7 +208,7 @@ void Simulator::reportBlowUp(int frame) const {
           ? std::string(" was moved to a position that is not finite")
           : cat(" reached speed ", v.allFinite() ? std::to_string(v.norm()) : std::string("NaN"),
                 " (limit ", topology.settings.maxSpeed, ")");
-  throw Error(
+  throw SimulationFailure(
       cat("the simulation blew up at frame ", frame, ": body '", body.name, "' particle ",
           particle - body.firstParticle, what, ". Use more substeps (now ", substeps_.substeps,
           substeps_.stableAtAnyStep ? std::string()

@@ -150,7 +150,8 @@ void PointCacheWriter::write(const Frame& frame) {
                              temporaryCounter.fetch_add(1, std::memory_order_relaxed));
       stream.file = std::fopen(stream.temporary.c_str(), "wbx");
       if (!stream.file)
-        throw Error(cat("cannot write '", stream.path.string(), "': ", std::strerror(errno)));
+        throw OutputFailure(
+            cat("cannot write '", stream.path.string(), "': ", std::strerror(errno)));
       streams_.push_back(stream);
     }
     for (std::size_t b = 0; b < stems_.size(); ++b) {
@@ -170,13 +171,13 @@ void PointCacheWriter::write(const Frame& frame) {
     }
   }
   if (frame.number != nextFrame_)
-    throw Error(cat("cannot write '", streams_.front().path.string(), "': frame ", frame.number,
-                    " arrived where frame ", nextFrame_,
-                    " belongs (point caches are written in "
-                    "order)"));
+    throw OutputFailure(cat("cannot write '", streams_.front().path.string(), "': frame ",
+                            frame.number, " arrived where frame ", nextFrame_,
+                            " belongs (point caches are written in "
+                            "order)"));
   if (nextFrame_ > frames_)
-    throw Error(cat("cannot write '", streams_.front().path.string(), "': frame ", frame.number,
-                    " is past the ", frames_, " frames of its header"));
+    throw OutputFailure(cat("cannot write '", streams_.front().path.string(), "': frame ",
+                            frame.number, " is past the ", frames_, " frames of its header"));
   for (std::size_t b = 0; b < stems_.size(); ++b) {
     const Body& body = topology_->bodies[b];
     const Stream& stream = streams_[b];
@@ -192,7 +193,7 @@ void PointCacheWriter::write(const Frame& frame) {
             std::bit_cast<float>(fileOrder(v[k], format_));
     }
     if (std::fwrite(buffer_.data(), 4, buffer_.size(), stream.file) != buffer_.size())
-      throw Error(cat("cannot write '", stream.path.string(), "': ", std::strerror(errno)));
+      throw OutputFailure(cat("cannot write '", stream.path.string(), "': ", std::strerror(errno)));
     bytes_.fetch_add(buffer_.size() * 4, std::memory_order_relaxed);
   }
   ++nextFrame_;
@@ -210,7 +211,7 @@ void PointCacheWriter::finish() {
     const bool closed = std::fclose(stream.file) == 0;
     stream.file = nullptr;
     if (!flushed || !closed)
-      throw Error(cat("cannot write '", stream.path.string(), "': ", std::strerror(error)));
+      throw OutputFailure(cat("cannot write '", stream.path.string(), "': ", std::strerror(error)));
     std::error_code renamed;
     std::filesystem::rename(stream.temporary, stream.path, renamed);
     if (renamed)

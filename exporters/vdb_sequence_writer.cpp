@@ -236,8 +236,9 @@ void stampContentUuid(const std::filesystem::path& temporary, const std::filesys
   }
   if (bytes.size() < kUuidOffset + kUuidLength || bytes[kUuidOffset + 8] != '-' ||
       bytes[kUuidOffset + 23] != '-')
-    throw Error(cat("cannot write '", path.string(),
-                    "': OpenVDB wrote a header without its UUID where softbake expects it"));
+    throw OutputFailure(
+        cat("cannot write '", path.string(),
+            "': OpenVDB wrote a header without its UUID where softbake expects it"));
   const std::string digest = sha256(std::string_view(bytes).substr(kUuidOffset + kUuidLength));
   static constexpr char kHex[] = "0123456789abcdef";
   char uuid[kUuidLength];
@@ -256,7 +257,8 @@ void stampContentUuid(const std::filesystem::path& temporary, const std::filesys
   out.seekp(std::streamoff(kUuidOffset));
   out.write(uuid, kUuidLength);
   out.close();
-  if (!out) throw Error(cat("cannot write '", path.string(), "': rewriting its UUID failed"));
+  if (!out)
+    throw OutputFailure(cat("cannot write '", path.string(), "': rewriting its UUID failed"));
 }
 
 /// Writes `grids` to `path` under a temporary name and renames it, so readers never see a torn
@@ -275,7 +277,7 @@ std::uintmax_t writeGridsAtomically(const std::filesystem::path& path,
   } catch (const std::exception& e) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
-    throw Error(cat("cannot write '", path.string(), "': ", e.what()));
+    throw OutputFailure(cat("cannot write '", path.string(), "': ", e.what()));
   }
   try {
     stampContentUuid(temporary, path);
@@ -289,7 +291,8 @@ std::uintmax_t writeGridsAtomically(const std::filesystem::path& path,
   if (error) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
-    throw Error(cat("cannot write '", path.string(), "': rename failed: ", error.message()));
+    throw OutputFailure(
+        cat("cannot write '", path.string(), "': rename failed: ", error.message()));
   }
   const std::uintmax_t size = std::filesystem::file_size(path, error);
   return error ? 0 : size;

@@ -30,7 +30,7 @@ std::string systemReason(int error) {
 }
 
 [[noreturn]] void fail(const std::filesystem::path& path, const char* step, int error) {
-  throw Error(cat("cannot write '", path.string(), "': ", step, ": ", systemReason(error)));
+  throw OutputFailure(cat("cannot write '", path.string(), "': ", step, ": ", systemReason(error)));
 }
 
 std::filesystem::path temporaryPath(const std::filesystem::path& path) {
@@ -127,11 +127,11 @@ void makeDirectories(const std::filesystem::path& directory) {
   std::error_code error;
   std::filesystem::create_directories(directory, error);
   if (error)
-    throw Error(
+    throw OutputFailure(
         cat("cannot create output directory '", directory.string(), "': ", error.message()));
   if (!std::filesystem::is_directory(directory, error))
-    throw Error(cat("cannot create output directory '", directory.string(),
-                    "': a file of that name is in the way"));
+    throw OutputFailure(cat("cannot create output directory '", directory.string(),
+                            "': a file of that name is in the way"));
 }
 
 }  // namespace softbake

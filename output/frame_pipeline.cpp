@@ -55,6 +55,7 @@ void FramePipeline::stopAndJoin() {
 }
 
 void FramePipeline::throwIfFailed() const {
+  if (!failure_.empty() && outputFailed_) throw OutputFailure(failure_);
   if (!failure_.empty()) throw Error(failure_);
   if (finishing_) throw Error("the frame pipeline has already finished");
 }
@@ -107,7 +108,7 @@ void FramePipeline::finish() {
   for (auto& worker : workers_)
     if (worker->thread.joinable()) worker->thread.join();
   std::lock_guard lock(mutex_);
-  if (!failure_.empty()) throw Error(failure_);
+  if (!failure_.empty()) throwIfFailed();
 }
 
 std::uint64_t FramePipeline::framesWritten(std::size_t index) const {
@@ -122,8 +123,12 @@ std::uint64_t FramePipeline::bytesWritten() const {
 
 void FramePipeline::fail(const Worker& worker, std::exception_ptr error) {
   std::string reason;
+  bool outputFailure = false;
   try {
     std::rethrow_exception(error);
+  } catch (const OutputFailure& e) {
+    reason = e.what();
+    outputFailure = true;
   } catch (const std::exception& e) {
     reason = e.what();
   } catch (...) {
@@ -131,7 +136,10 @@ void FramePipeline::fail(const Worker& worker, std::exception_ptr error) {
   }
   {
     std::lock_guard lock(mutex_);
-    if (failure_.empty()) failure_ = cat("writer '", worker.sink->name(), "': ", reason);
+    if (failure_.empty()) {
+      failure_ = cat("writer '", worker.sink->name(), "': ", reason);
+      outputFailed_ = outputFailure;
+    }
     stopping_ = true;
   }
   queued_.notify_all();

@@ -88,7 +88,8 @@ class FramePipeline {
   std::uint64_t submitted_ = 0;
   bool finishing_ = false;
   bool stopping_ = false;
-  std::string failure_;  ///< the first sink failure's message; empty while all is well
+  std::string failure_;        ///< the first sink failure's message; empty while all is well
+  bool outputFailed_ = false;  ///< that failure was an OutputFailure: rethrown as one
 };
 
 }  // namespace softbake

@@ -146,7 +146,7 @@ TEST_F(CliTest, TooFewSubstepsBlowsUpWithAClearErrorAndNoNaNInAnyFile) {
   const fs::path out = folder_ / "out";
   const Result run = runSoftbake("run --integrator explicit --frames 48 --substeps 1 -q -o " +
                                  quoted(out.string()));
-  ASSERT_EQ(run.exitCode, 1) << run.output;
+  ASSERT_EQ(run.exitCode, 2) << run.output;  // the simulation failed
   EXPECT_NE(run.output.find("substeps"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("frame"), std::string::npos) << run.output;
   // The manifest says the run failed and why. The frames before the blow-up are written; none is
