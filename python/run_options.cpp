@@ -24,13 +24,14 @@ struct Reader {
   py::handle value;
 
   [[noreturn]] void wrongType(std::string_view expected) const {
-    throw py::type_error(cat(caller, ": ", keyword, ": expected ", expected, ", got ",
-                             py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>(),
-                             " ", py::repr(value).cast<std::string>()));
+    throw py::type_error(
+        cat(caller, ": ", keyword, ": expected ", expected, ", got ",
+            py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>(), " ",
+            py::repr(value).cast<std::string>()));
   }
   [[noreturn]] void outOfRange(std::string_view expected) const {
-    throw py::value_error(
-        cat(caller, ": ", keyword, ": expected ", expected, ", got ", py::repr(value).cast<std::string>()));
+    throw py::value_error(cat(caller, ": ", keyword, ": expected ", expected, ", got ",
+                              py::repr(value).cast<std::string>()));
   }
 
   bool flag() const {
@@ -52,8 +53,9 @@ struct Reader {
 
   /// A finite number (int or float, not bool) in [low, high], or above `low` when `aboveLow`.
   double number(double low, double high, bool aboveLow = false) const {
-    if (PyBool_Check(value.ptr()) || !(PyFloat_Check(value.ptr()) || PyIndex_Check(value.ptr()) ||
-                                        py::hasattr(value, "__float__")) ||
+    if (PyBool_Check(value.ptr()) ||
+        !(PyFloat_Check(value.ptr()) || PyIndex_Check(value.ptr()) ||
+          py::hasattr(value, "__float__")) ||
         PyUnicode_Check(value.ptr()))
       wrongType("a number");
     const double result = PyFloat_AsDouble(value.ptr());
@@ -85,7 +87,8 @@ std::string numberText(double value) {
 }
 
 /// What one keyword does: writes `options` and appends its flags to `flags`.
-using Apply = std::function<void(const Reader&, RunOptions& options, std::vector<std::string>& flags)>;
+using Apply =
+    std::function<void(const Reader&, RunOptions& options, std::vector<std::string>& flags)>;
 
 struct Keyword {
   KeywordSet set;  ///< Simulation: taken by both; Run: by run() alone
@@ -145,8 +148,8 @@ const std::map<std::string, Keyword>& keywords() {
                                o.fps = r.number(0.001, 1e6);
                                flags.insert(flags.end(), {"--fps", numberText(*o.fps)});
                              }});
-    k.emplace("integrator",
-              choiceKeyword(S::Simulation, "--integrator", integratorNames(), &RunOptions::integrator));
+    k.emplace("integrator", choiceKeyword(S::Simulation, "--integrator", integratorNames(),
+                                          &RunOptions::integrator));
     k.emplace("substeps", Keyword{S::Simulation, [](const Reader& r, RunOptions& o, auto& flags) {
                                     if (PyUnicode_Check(r.value.ptr()) && r.text() == "auto")
                                       o.substeps = "auto";
@@ -164,14 +167,15 @@ const std::map<std::string, Keyword>& keywords() {
     k.emplace("no_response", flagKeyword(S::Simulation, "--no-response", &RunOptions::noResponse));
     k.emplace("no_pair_cache",
               flagKeyword(S::Simulation, "--no-pair-cache", &RunOptions::noPairCache));
-    k.emplace("threads", Keyword{S::Simulation, [](const Reader& r, RunOptions& o, auto& flags) {
-                                   o.threads = int(r.whole(0, 4096));
-                                   flags.insert(flags.end(), {"--threads", std::to_string(o.threads)});
-                                 }});
+    k.emplace("threads",
+              Keyword{S::Simulation, [](const Reader& r, RunOptions& o, auto& flags) {
+                        o.threads = int(r.whole(0, 4096));
+                        flags.insert(flags.end(), {"--threads", std::to_string(o.threads)});
+                      }});
     k.emplace("accept_lossy_import",
               loadFlagKeyword("--accept-lossy-import", &SceneLoadOptions::acceptLossyImport));
-    k.emplace("max_vertices", loadWholeKeyword("--max-vertices", 1, 1LL << 62,
-                                               &SceneLoadOptions::maxVertices));
+    k.emplace("max_vertices",
+              loadWholeKeyword("--max-vertices", 1, 1LL << 62, &SceneLoadOptions::maxVertices));
     k.emplace("max_faces",
               loadWholeKeyword("--max-faces", 1, 1LL << 62, &SceneLoadOptions::maxFaces));
     k.emplace("max_import_memory", loadWholeKeyword("--max-import-memory", 1, 1LL << 40,
@@ -188,40 +192,45 @@ const std::map<std::string, Keyword>& keywords() {
                                   o.render = r.flag();
                                   flags.push_back(*o.render ? "--render" : "--no-render");
                                 }});
-    k.emplace("size", Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
-                                // "1280x720", or (1280, 720); run() checks the bounds as the
-                                // command does.
-                                if (PyTuple_Check(r.value.ptr()) || PyList_Check(r.value.ptr())) {
-                                  const py::sequence pair = py::reinterpret_borrow<py::sequence>(r.value);
-                                  if (pair.size() != 2) r.wrongType("'WIDTHxHEIGHT' or (width, height)");
-                                  const py::object first = pair[0], second = pair[1];
-                                  const Reader width{r.caller, r.keyword + "[0]", first};
-                                  const Reader height{r.caller, r.keyword + "[1]", second};
-                                  o.size = cat(width.whole(16, 16384), "x", height.whole(16, 16384));
-                                } else {
-                                  o.size = r.text();
-                                }
-                                flags.insert(flags.end(), {"--size", *o.size});
-                              }});
+    k.emplace("size",
+              Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
+                        // "1280x720", or (1280, 720); run() checks the bounds as the
+                        // command does.
+                        if (PyTuple_Check(r.value.ptr()) || PyList_Check(r.value.ptr())) {
+                          const py::sequence pair = py::reinterpret_borrow<py::sequence>(r.value);
+                          if (pair.size() != 2) r.wrongType("'WIDTHxHEIGHT' or (width, height)");
+                          const py::object first = pair[0], second = pair[1];
+                          const Reader width{r.caller, r.keyword + "[0]", first};
+                          const Reader height{r.caller, r.keyword + "[1]", second};
+                          o.size = cat(width.whole(16, 16384), "x", height.whole(16, 16384));
+                        } else {
+                          o.size = r.text();
+                        }
+                        flags.insert(flags.end(), {"--size", *o.size});
+                      }});
     k.emplace("no_contact_spheres",
               flagKeyword(S::Run, "--no-contact-spheres", &RunOptions::noContactSpheres));
-    k.emplace("render_while_simulating", flagKeyword(S::Run, "--render-while-simulating",
-                                                     &RunOptions::renderWhileSimulating));
+    k.emplace("render_while_simulating",
+              flagKeyword(S::Run, "--render-while-simulating", &RunOptions::renderWhileSimulating));
+    k.emplace("pc2", flagKeyword(S::Run, "--pc2", &RunOptions::pc2));
+    k.emplace("mdd", flagKeyword(S::Run, "--mdd", &RunOptions::mdd));
     k.emplace("vdb", flagKeyword(S::Run, "--vdb", &RunOptions::vdb));
-    k.emplace("voxel_size", Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
-                                      o.voxelSize = r.number(0, HUGE_VAL, true);
-                                      flags.insert(flags.end(), {"--voxel-size", numberText(*o.voxelSize)});
-                                    }});
+    k.emplace("voxel_size",
+              Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
+                        o.voxelSize = r.number(0, HUGE_VAL, true);
+                        flags.insert(flags.end(), {"--voxel-size", numberText(*o.voxelSize)});
+                      }});
     k.emplace("vdb_fog", flagKeyword(S::Run, "--vdb-fog", &RunOptions::vdbFog));
-    k.emplace("vdb_compression", choiceKeyword(S::Run, "--vdb-compression",
-                                               {"zip", "blosc", "none"}, &RunOptions::vdbCompression));
+    k.emplace("vdb_compression",
+              choiceKeyword(S::Run, "--vdb-compression", {"zip", "blosc", "none"},
+                            &RunOptions::vdbCompression));
     k.emplace("up", choiceKeyword(S::Run, "--up", {"y", "z"}, &RunOptions::upAxis));
     k.emplace("quiet", flagKeyword(S::Run, "--quiet", &RunOptions::quiet));
-    k.emplace("max_output_gib", Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
-                                          o.maxOutputGib = r.number(0, HUGE_VAL, true);
-                                          flags.insert(flags.end(),
-                                                       {"--max-output-gib", numberText(o.maxOutputGib)});
-                                        }});
+    k.emplace("max_output_gib",
+              Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
+                        o.maxOutputGib = r.number(0, HUGE_VAL, true);
+                        flags.insert(flags.end(), {"--max-output-gib", numberText(o.maxOutputGib)});
+                      }});
     k.emplace("no_cache", Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
                                     o.cache = !r.flag();
                                     if (!o.cache) flags.push_back("--no-cache");

@@ -3,6 +3,7 @@
 // reports as "softbake: error: …".
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -16,9 +17,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
+#include <nlohmann/json.hpp>
 
+#include "cli/interruption.hpp"
 #include "cli/run_command.hpp"
 #include "cli/scene_input.hpp"
 #include "cli/shell_quote.hpp"
@@ -76,15 +78,15 @@ nlohmann::json toJson(py::handle value, const std::string& path) {
     const unsigned long long big = PyLong_AsUnsignedLongLong(number.ptr());
     if (!PyErr_Occurred()) return big;
     PyErr_Clear();
-    throw py::value_error(cat(where(), ": ", py::str(value).cast<std::string>(),
-                              " is out of range for JSON"));
+    throw py::value_error(
+        cat(where(), ": ", py::str(value).cast<std::string>(), " is out of range for JSON"));
   }
   if (PyDict_Check(object)) {
     nlohmann::json result = nlohmann::json::object();
     for (const auto& [key, item] : py::reinterpret_borrow<py::dict>(value)) {
       if (!PyUnicode_Check(key.ptr()))
-        throw py::type_error(cat(where(), ": the key ", py::repr(key).cast<std::string>(),
-                                 " is not a string"));
+        throw py::type_error(
+            cat(where(), ": the key ", py::repr(key).cast<std::string>(), " is not a string"));
       const std::string name = key.cast<std::string>();
       result[name] = toJson(item, path.empty() ? name : cat(path, ".", name));
     }
@@ -96,7 +98,8 @@ nlohmann::json toJson(py::handle value, const std::string& path) {
     for (py::handle item : value) result.push_back(toJson(item, cat(path, "[", index++, "]")));
     return result;
   }
-  throw py::type_error(cat(where(), ": ", py::type::handle_of(value).attr("__name__").cast<std::string>(),
+  throw py::type_error(cat(where(), ": ",
+                           py::type::handle_of(value).attr("__name__").cast<std::string>(),
                            " is not JSON (expected dict, list, str, int, float, bool or None)"));
 }
 
@@ -121,8 +124,9 @@ class Simulation {
   Simulation(const std::optional<std::string>& scene, const std::optional<nlohmann::json>& json,
              const RunOptions& options) {
     if (options.threads > 0) arena_ = std::make_unique<tbb::task_arena>(options.threads);
-    SceneFile file = json ? parseScene(*json, kDictSource, std::filesystem::current_path(), options.load)
-                          : loadSceneInput(scene.value_or(""), options.load);
+    SceneFile file =
+        json ? parseScene(*json, kDictSource, std::filesystem::current_path(), options.load)
+             : loadSceneInput(scene.value_or(""), options.load);
     applySimulationOverrides(options, file.setup.settings);
     name_ = file.setup.name;
     notes_ = std::move(file.notes);
@@ -176,15 +180,21 @@ class Simulation {
       for (const Body& candidate : bodies)
         if (candidate.name == name) return candidate;
       std::string names;
-      for (const std::string& known : bodyNames_) names += cat(names.empty() ? "" : ", ", "'", known, "'");
-      throw py::key_error(cat("no body '", name, "' in scene '", name_, "' (its bodies: ", names, ")"));
+      for (const std::string& known : bodyNames_)
+        names += cat(names.empty() ? "" : ", ", "'", known, "'");
+      throw py::key_error(
+          cat("no body '", name, "' in scene '", name_, "' (its bodies: ", names, ")"));
     }
     if (PyBool_Check(body.ptr()) || !PyIndex_Check(body.ptr()))
       throw py::type_error("body: expected a body's name (str) or index (int)");
     const long long count = static_cast<long long>(bodies.size());
-    long long index = py::reinterpret_steal<py::int_>(PyNumber_Index(body.ptr())).cast<long long>();
-    if (index < -count || index >= count)
-      throw py::index_error(cat("body ", index, ": scene '", name_, "' has ", count, " bodies"));
+    const py::int_ number = py::reinterpret_steal<py::int_>(PyNumber_Index(body.ptr()));
+    if (!number) throw py::error_already_set();
+    int overflow = 0;
+    long long index = PyLong_AsLongLongAndOverflow(number.ptr(), &overflow);
+    if (overflow != 0 || index < -count || index >= count)
+      throw py::index_error(cat("body ", py::repr(number).cast<std::string>(), ": scene '", name_,
+                                "' has ", count, " bodies"));
     if (index < 0) index += count;
     return bodies[std::size_t(index)];
   }
@@ -193,7 +203,9 @@ class Simulation {
   py::list contacts() const {
     const Busy busy(*this, "contacts()");
     const SceneTopology& topology = this->topology();
-    const auto triple = [](const Vec3& v) { return py::make_tuple(double(v.x()), double(v.y()), double(v.z())); };
+    const auto triple = [](const Vec3& v) {
+      return py::make_tuple(double(v.x()), double(v.y()), double(v.z()));
+    };
     const auto local = [&](Index triangle, Index surface) -> py::object {
       if (triangle == kNoIndex) return py::none();
       return py::int_(triangle - surfaceFirstTriangle_[surface]);
@@ -204,11 +216,14 @@ class Simulation {
       contact["kind"] = std::string(contactKindName(c.kind));
       contact["position"] = triple(c.position);
       contact["normal"] = triple(c.normal);
-      contact["bodies"] = py::make_tuple(topology.surfaceName(c.surfaceA), topology.surfaceName(c.surfaceB));
-      contact["triangles"] = py::make_tuple(local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB));
-      contact["particle"] = c.particle == kNoIndex
-                                ? py::object(py::none())
-                                : py::object(py::int_(c.particle - topology.bodies[c.surfaceA].firstParticle));
+      contact["bodies"] =
+          py::make_tuple(topology.surfaceName(c.surfaceA), topology.surfaceName(c.surfaceB));
+      contact["triangles"] =
+          py::make_tuple(local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB));
+      contact["particle"] =
+          c.particle == kNoIndex
+              ? py::object(py::none())
+              : py::object(py::int_(c.particle - topology.bodies[c.surfaceA].firstParticle));
       list.append(std::move(contact));
     }
     return list;
@@ -221,7 +236,8 @@ class Simulation {
    public:
     Busy(const Simulation& simulation, const char* call) : busy_(simulation.busy_) {
       if (busy_.exchange(true))
-        throw py::value_error(cat(call, ": advance() is running on this Simulation in another thread"));
+        throw py::value_error(
+            cat(call, ": advance() is running on this Simulation in another thread"));
     }
     ~Busy() { busy_ = false; }
 
@@ -246,12 +262,14 @@ py::array bodyView(py::object self, py::handle body, bool velocities) {
   const Body& b = simulation.body(body);
   const SimulationState& state = simulation.simulator().state();
   const Vec3* first = (velocities ? state.velocity : state.position).data() + b.firstParticle;
-  py::array view(py::dtype::of<Scalar>(),
-                 {py::ssize_t(b.particleCount), py::ssize_t(3)},
+  py::array view(py::dtype::of<Scalar>(), {py::ssize_t(b.particleCount), py::ssize_t(3)},
                  {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(Scalar))}, first->data(), self);
   view.attr("setflags")(py::arg("write") = false);
   return view;
 }
+
+/// softbake.Error, once the module has made it.
+PyObject* errorClass = nullptr;
 
 /// One `softbake.run()` at a time: runCommand() installs process-wide signal handlers and the
 /// error capture redirects the process's stderr.
@@ -267,8 +285,7 @@ int run(py::object scene, py::object out, py::kwargs keywords) {
     options.input = pathText(scene);
   }
   options.out = pathText(out);
-  const std::vector<std::string> flags =
-      applyKeywords(keywords, KeywordSet::Run, "run()", options);
+  const std::vector<std::string> flags = applyKeywords(keywords, KeywordSet::Run, "run()", options);
   // The command that does the same, printed with --resume when the run is interrupted.
   std::vector<std::string> words{"softbake", "run"};
   if (!options.input.empty()) words.push_back(options.input);
@@ -288,9 +305,14 @@ int run(py::object scene, py::object out, py::kwargs keywords) {
     std::fflush(stdout);
     reported = reportedError(stderrTail.finish());
   }
-  if (code == 1)
-    throw Error(reported.empty() ? std::string("softbake run failed (exit code 1)") : reported);
-  return code;
+  // Interrupted runs return their status like a finished one: they are resumable, not failed.
+  if (code == 0 || code == interruptedExitCode(SIGINT) || code == interruptedExitCode(SIGTERM))
+    return code;
+  const py::object error = py::reinterpret_borrow<py::object>(errorClass)(
+      reported.empty() ? cat("softbake run failed (exit code ", code, ")") : reported);
+  error.attr("exit_code") = code;
+  PyErr_SetObject(errorClass, error.ptr());
+  throw py::error_already_set();
 }
 
 }  // namespace
@@ -301,7 +323,8 @@ PYBIND11_MODULE(softbake, m) {
   using namespace softbake;
   using namespace softbake::python;
   m.doc() =
-      "softbake: offline soft-body simulation (pressure soft bodies, Mesit & Guha's collisions).\n\n"
+      "softbake: offline soft-body simulation (pressure soft bodies, Mesit & Guha's "
+      "collisions).\n\n"
       "Simulation(scene) simulates a scene frame by frame in this process; run(scene, out) does "
       "all that `softbake run` does. Errors raise softbake.Error with the message the command "
       "prints.";
@@ -310,7 +333,11 @@ PYBIND11_MODULE(softbake, m) {
   // softbake::Error and file-system errors are what the command reports as "softbake: error: …";
   // both raise softbake.Error with that message.
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
-  error.doc() = "What `softbake` reports as 'softbake: error: MESSAGE': str(e) is MESSAGE.";
+  error.doc() =
+      "What `softbake` reports as 'softbake: error: MESSAGE': str(e) is MESSAGE. Raised by "
+      "run(), it has exit_code, the status the command exits with.";
+  error.attr("exit_code") = py::none();
+  errorClass = error.ptr();
   py::register_exception_translator([](std::exception_ptr pending) {
     try {
       if (pending) std::rethrow_exception(pending);
@@ -356,31 +383,37 @@ Simulates `frames` more frames (Simulator::advanceToFrame for each), without hol
 A blow-up raises softbake.Error, naming the body and frame as the command does; the simulation
 cannot go on after it. Ctrl-C (KeyboardInterrupt) stops it between two frames.
 )doc")
-      .def_property_readonly("frame", &Simulation::frame,
-                             "The frame the state is at: 1 is the initial state, as in the outputs.")
-      .def_property_readonly("frames", [](const Simulation& s) { return s.topology().settings.frames; },
-                             "The frames the scene asks for (settings.frames, or frames=).")
+      .def_property_readonly(
+          "frame", &Simulation::frame,
+          "The frame the state is at: 1 is the initial state, as in the outputs.")
+      .def_property_readonly(
+          "frames", [](const Simulation& s) { return s.topology().settings.frames; },
+          "The frames the scene asks for (settings.frames, or frames=).")
       .def_property_readonly("fps", [](const Simulation& s) { return s.topology().settings.fps; })
-      .def_property_readonly("time", [](const Simulation& s) {
-        return (s.frame() - 1) / s.topology().settings.fps;
-      }, "Seconds since frame 1.")
-      .def_property_readonly("name", &Simulation::name, "The scene's name, as the output files have it.")
+      .def_property_readonly(
+          "time", [](const Simulation& s) { return (s.frame() - 1) / s.topology().settings.fps; },
+          "Seconds since frame 1.")
+      .def_property_readonly("name", &Simulation::name,
+                             "The scene's name, as the output files have it.")
       .def_property_readonly("bodies", &Simulation::bodies, "The soft bodies' names, in order.")
       .def_property_readonly("notes", &Simulation::notes,
                              "What loading and building the scene did that `run` prints as notes.")
       .def_property_readonly("warnings", &Simulation::warnings,
                              "What may be wrong with the meshes, as `run` prints it.")
-      .def_property_readonly("substeps", [](const Simulation& s) { return s.simulator().substeps().substeps; },
-                             "Substeps of the latest frame.")
-      .def("positions", [](py::object self, py::handle body) { return bodyView(self, body, false); },
-           py::arg("body"), R"doc(
+      .def_property_readonly(
+          "substeps", [](const Simulation& s) { return s.simulator().substeps().substeps; },
+          "Substeps of the latest frame.")
+      .def(
+          "positions", [](py::object self, py::handle body) { return bodyView(self, body, false); },
+          py::arg("body"), R"doc(
 The positions of `body` (its name, or its index in `bodies`) as a read-only (N, 3) array of
 float32 (float64 in a SOFTBAKE_DOUBLE_PRECISION build), in particle order: the order of the
 body's `v` lines in the OBJ frames. No copy: the array is a view of the simulation's own state,
 so it changes when advance() runs (copy it to keep a frame), and it keeps the Simulation alive.
 )doc")
-      .def("velocities", [](py::object self, py::handle body) { return bodyView(self, body, true); },
-           py::arg("body"), "The velocities of `body` (m/s), a view like positions().")
+      .def(
+          "velocities", [](py::object self, py::handle body) { return bodyView(self, body, true); },
+          py::arg("body"), "The velocities of `body` (m/s), a view like positions().")
       .def("contacts", &Simulation::contacts, R"doc(
 The contacts of the latest frame's last substep, as the contacts JSON files list them: a list of
 dicts with kind ('edge-triangle', 'particle-triangle' or 'corner'), position and normal
@@ -403,12 +436,13 @@ options: the flags of `softbake run`, named without their dashes and with '_' fo
   frames, fps, integrator, substeps ('auto' or a count), broadphase, levels, response,
   no_response, no_pair_cache, frame_padding, contacts, render (True: --render, False:
   --no-render, None: the scene's choice), size ('1280x720' or (1280, 720)), no_contact_spheres,
-  render_while_simulating, vdb, voxel_size, vdb_fog, vdb_compression, up, threads, quiet,
+  render_while_simulating, vdb, voxel_size, vdb_fog, vdb_compression, up, pc2, mdd, threads, quiet,
   max_output_gib, no_cache, checkpoint_every, cache_only, resume, accept_lossy_import,
   max_vertices, max_faces, max_import_memory, max_bodies.
 
 Returns the command's exit code: 0, or 130/143 when SIGINT/SIGTERM stopped it after a frame (the
 run can be continued with resume=True). Raises softbake.Error with the command's message when it
-fails (exit code 1), TypeError/ValueError for options the command line would refuse.
+fails, its exit_code the command's status; TypeError/ValueError for options the command line
+would refuse.
 )doc");
 }

@@ -23,8 +23,8 @@ class StderrTail {
 
  private:
   std::size_t keep_;
-  int saved_ = -1;     ///< where stderr went before
-  int readEnd_ = -1;   ///< the pipe's end the reader drains
+  int saved_ = -1;    ///< where stderr went before
+  int readEnd_ = -1;  ///< the pipe's end the reader drains
   std::string tail_;
   std::thread reader_;
 };

@@ -9,6 +9,7 @@ import _thread
 import copy
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -211,6 +212,18 @@ def test_run_options(tmp_path):
     assert not (tmp_path / "b").exists()  # refused before anything was written
 
 
+def test_run_takes_every_flag_of_the_command(tmp_path):
+    """Each flag `softbake run --help` lists is a keyword of run() (--no-render is render=False)."""
+    flags = re.findall(r"^\s+(?:-\w,)?--([a-z][a-z0-9-]*)", cli("run", "--help").stdout, re.M)
+    keywords = {flag.replace("-", "_") for flag in flags} - {"help", "out", "no_render"}
+    assert {"frames", "render", "vdb", "resume"} <= keywords
+    for keyword in sorted(keywords):
+        with pytest.raises((TypeError, ValueError)) as error:  # no option takes an object()
+            softbake.run("default", out=tmp_path / "never", **{keyword: object()})
+        assert "unexpected keyword" not in str(error.value), f"run() lacks --{keyword}"
+    assert not (tmp_path / "never").exists()
+
+
 # --- errors: the command's messages -------------------------------------------------------------
 
 def test_bad_scene_path_raises_the_cli_message(tmp_path):
@@ -224,6 +237,7 @@ def test_bad_scene_path_raises_the_cli_message(tmp_path):
     with pytest.raises(softbake.Error) as error:
         softbake.run(missing, out=tmp_path / "py")
     assert str(error.value) == expected
+    assert error.value.exit_code == 1  # the command's status for bad input
 
 
 def test_bad_key_in_a_dict_names_the_key_path(tmp_path):

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "core/dynamics/material.hpp"
 #include "core/mesh/icosphere.hpp"
@@ -35,10 +36,11 @@ int main() {
   const double start = heights().first;
   for (int frame = 2; frame <= setup.settings.frames; ++frame) simulator.advanceToFrame(frame);
   const auto [centre, lowest] = heights();
-  std::printf("softbake package consumer: %zu particles, frame %d, %llu substeps, centre from "
-              "%.3f m to %.3f m, lowest point %.4f m\n",
-              simulator.state().particleCount(), setup.settings.frames,
-              static_cast<unsigned long long>(simulator.stepsTaken()), start, centre, lowest);
+  std::printf(
+      "softbake package consumer: %zu particles, frame %d, %llu substeps, centre from "
+      "%.3f m to %.3f m, lowest point %.4f m\n",
+      simulator.state().particleCount(), setup.settings.frames,
+      static_cast<unsigned long long>(simulator.stepsTaken()), start, centre, lowest);
   // Free fall alone would take the centre from 1 m to below the ground within the second; the
   // ground must have stopped it above 0, and below where it started.
   if (!(centre < start - 0.3 && lowest > -0.01)) {
