@@ -246,7 +246,7 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
        "scene.json: output.obj: expected boolean"},
       {oneBody("").insert(1, R"("output": {"ply": true}, )"),
        "scene.json: output: unknown key 'ply' (valid keys: frame_padding, obj, contacts, png, "
-       "vdb)"},
+       "vdb, pc2, mdd)"},
   };
   for (const Case& c : cases) EXPECT_EQ(sceneError(c.json), c.error) << c.json;
 }
