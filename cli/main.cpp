@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -37,6 +38,19 @@ std::string checkSubsteps(const std::string& value) {
   }
   return "expected 'auto' or a whole number >= 1, got '" + value + "'";
 }
+
+/// A number above zero; CLI11's PositiveNumber would print the largest double as its bound.
+const CLI::Validator positiveNumber(
+    [](std::string& value) -> std::string {
+      try {
+        std::size_t used = 0;
+        const double number = std::stod(value, &used);
+        if (used == value.size() && number > 0 && std::isfinite(number)) return {};
+      } catch (...) {
+      }
+      return "expected a number > 0, got '" + value + "'";
+    },
+    "NUMBER > 0");
 
 /// The options `run` and `bench` both take for reading their input.
 void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
@@ -165,7 +179,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp
       ->add_option("--voxel-size", run.voxelSize,
                    "VDB voxel size in scene units (default: half the mean edge length)")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber);
   runApp->add_flag("--vdb-fog", run.vdbFog, "also write a fog volume (density) per body");
   runApp
       ->add_option("--vdb-compression", run.vdbCompression,
@@ -181,7 +195,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "refuse, before any work, a run whose frames would take more than this many "
                    "GiB on disk (estimated)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber);
   CLI::Option* noCache = runApp->add_flag(
       "--no-cache", line.noCache,
       "write no simulation cache (OUT/cache): the run cannot be resumed or exported from");

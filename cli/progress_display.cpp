@@ -19,11 +19,20 @@ double ProgressDisplay::elapsedSeconds() const {
 
 void ProgressDisplay::update(int frame) {
   if (quiet_) return;
-  const double elapsed = elapsedSeconds();
-  const double fps = elapsed > 0 ? frame / elapsed : 0;
+  const auto now = std::chrono::steady_clock::now();
+  if (firstFrame_ < 0) {
+    firstFrame_ = frame;
+    firstTime_ = now;
+  }
+  const double elapsed = std::chrono::duration<double>(now - firstTime_).count();
+  const bool measured = frame > firstFrame_;
+  const double fps = measured && elapsed > 0 ? (frame - firstFrame_) / elapsed : 0;
   const double eta = fps > 0 ? (total_ - frame) / fps : 0;
+  // No rate before a frame has been simulated: there is nothing to measure yet.
+  char rate[64] = "";
+  if (measured || frame == total_)
+    std::snprintf(rate, sizeof rate, "  %.1f frames/s  ETA %.1f s", fps, eta);
   if (terminal_) {
-    const auto now = std::chrono::steady_clock::now();
     // Redrawing more than ~20 times a second only costs time.
     if (frame != total_ && now - lastDraw_ < std::chrono::milliseconds(50)) return;
     lastDraw_ = now;
@@ -31,15 +40,14 @@ void ProgressDisplay::update(int frame) {
     const int filled = total_ > 0 ? frame * kWidth / total_ : kWidth;
     std::string bar(std::size_t(filled), '#');
     bar.resize(kWidth, '.');
-    std::fprintf(stderr, "\r[%s] frame %d/%d  %.1f frames/s  ETA %.1f s   ", bar.c_str(), frame,
-                 total_, fps, eta);
+    std::fprintf(stderr, "\r[%s] frame %d/%d%s   ", bar.c_str(), frame, total_, rate);
     std::fflush(stderr);
     return;
   }
   const int tenth = total_ > 0 ? frame * 10 / total_ : 10;
   if (tenth == lastPlainTenth_) return;
   lastPlainTenth_ = tenth;
-  std::fprintf(stderr, "frame %d/%d  %.1f frames/s  ETA %.1f s\n", frame, total_, fps, eta);
+  std::fprintf(stderr, "frame %d/%d%s\n", frame, total_, rate);
 }
 
 void ProgressDisplay::finish() {

@@ -22,6 +22,10 @@ class ProgressDisplay {
   bool quiet_;
   bool terminal_;
   int lastPlainTenth_ = -1;
+  /// The first frame reported and when: rates count the frames after it, so a frame that needed no
+  /// simulation (frame 1, the initial state; the frames a resumed run skips) does not inflate them.
+  int firstFrame_ = -1;
+  std::chrono::steady_clock::time_point firstTime_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point lastDraw_;
 };

@@ -89,9 +89,17 @@ void describeInitialOverlaps(const Simulator& simulator) {
                        "without velocity (initial_overlap \"separate\"; \"ignore\" glues them)");
 }
 
-/// The scene's size, its substeps and its collision setup, on stdout.
-void describeRun(const std::string& name, const Simulator& simulator) {
+/// The scene's size, its substeps and its collision setup, on stdout; with `quiet`, only what
+/// may be wrong (too few explicit substeps, surfaces that start inside each other).
+void describeRun(const std::string& name, const Simulator& simulator, bool quiet) {
   const SceneTopology& topology = simulator.topology();
+  if (quiet) {
+    if (!simulator.substeps().stableAtAnyStep && simulator.substeps().belowBound() &&
+        !simulator.substeps().automatic)
+      describeSubsteps(simulator.substeps(), topology.settings.integrator);
+    describeInitialOverlaps(simulator);
+    return;
+  }
   std::size_t triangles = 0;
   for (const Body& body : topology.bodies) triangles += body.triangleCount;
   std::printf(
@@ -257,17 +265,19 @@ int run(const RunOptions& options) {
 
   SceneFile scene = loadSceneInput(options.input, options.load);
   applyOverrides(options, scene);
-  for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
+  if (!options.quiet)
+    for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
   printWarnings(scene);
   const RenderOptions render = renderOptions(options, scene.render);
   requireOutputWithin(scene, render.width, render.height, options.maxOutputGib * 0x1p30);
 
   BuildReport report;
   Simulator simulator(buildSceneTopology(scene.setup, &report));
-  for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
+  if (!options.quiet)
+    for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
   const SceneTopology& topology = simulator.topology();
   const std::string& name = scene.setup.name;
-  describeRun(name, simulator);
+  describeRun(name, simulator, options.quiet);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(options, topology);
   const int checkpointEvery = checkpointInterval(options, simulator);
@@ -283,7 +293,7 @@ int run(const RunOptions& options) {
     throw Error("--cache-only and --no-cache leave nothing to write");
   const bool afterFromCache = options.cache && !options.cacheOnly;
   const bool renderAfter = scene.output.png && afterFromCache && !options.renderWhileSimulating;
-  if (scene.output.png && !options.cache && !options.renderWhileSimulating)
+  if (scene.output.png && !options.cache && !options.renderWhileSimulating && !options.quiet)
     std::printf(
         "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
         "framed on the first frame\n");
@@ -450,9 +460,12 @@ int run(const RunOptions& options) {
     std::printf("resumed: wrote %d missing frames (%s) to %s in %.2f s\n", result.framesWritten,
                 formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds);
   else
-    std::printf("wrote %d frames (%s) to %s in %.2f s: %.1f frames/s, %.0f steps, %.0f steps/s\n",
-                frames, formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds,
-                seconds > 0 ? frames / seconds : 0.0, steps, seconds > 0 ? steps / seconds : 0.0);
+    // Frame 1 is the initial state: the rate counts the frames that were simulated.
+    std::printf(
+        "wrote %d frames (%s) to %s in %.2f s: %.1f simulated frames/s, %.0f steps, %.0f "
+        "steps/s\n",
+        frames, formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds,
+        seconds > 0 ? (frames - 1) / seconds : 0.0, steps, seconds > 0 ? steps / seconds : 0.0);
   if (simulator.collides())
     std::printf(
         "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "

@@ -104,7 +104,8 @@ std::vector<std::unique_ptr<FrameSink>> openSinks(
   };
   if (output.obj)
     addSequence("obj", ".obj",
-                std::make_unique<ObjSequenceWriter>(topology, options.out, name, padding));
+                std::make_unique<ObjSequenceWriter>(topology, options.out, name, padding,
+                                                    render.bodyColors));
   if (output.contacts)
     addSequence("contacts", ".json",
                 std::make_unique<ContactWriter>(*topology, options.out, name, padding));

@@ -93,12 +93,15 @@ Vec3f bodyColour(std::size_t index) {
   }
 }
 
-std::string materialLibrary(const std::vector<std::string>& names, const std::string& scene) {
+std::string materialLibrary(const std::vector<std::string>& names, const std::string& scene,
+                            const std::vector<Vec3f>& colors) {
   std::string text = cat("# softbake ", softbakeVersion(), " materials of scene ", scene, "\n");
   for (std::size_t i = 0; i < names.size(); ++i) {
     char line[kMaxLine];
     char* p = putText(line, "Kd");
-    for (float channel : bodyColour(i)) {
+    const bool given = i < colors.size() && colors[i].x() >= 0;
+    const Vec3f colour = given ? colors[i] : bodyColour(i);
+    for (float channel : {colour.x(), colour.y(), colour.z()}) {
       *p++ = ' ';
       p = std::to_chars(p, p + kMaxNumber, channel, std::chars_format::fixed, 3).ptr;
     }
@@ -182,7 +185,8 @@ void checkScene(const std::string& scene) {
 
 ObjSequenceWriter::ObjSequenceWriter(std::shared_ptr<const SceneTopology> topology,
                                      const std::filesystem::path& outputDirectory,
-                                     std::string scene, int framePadding)
+                                     std::string scene, int framePadding,
+                                     std::vector<Vec3f> bodyColors)
     : topology_(std::move(topology)),
       particleCount_(topology_->particleCount()),
       objDirectory_(outputDirectory / "obj"),
@@ -211,7 +215,7 @@ ObjSequenceWriter::ObjSequenceWriter(std::shared_ptr<const SceneTopology> topolo
   }
 
   makeDirectories(objDirectory_);
-  const std::string materials = materialLibrary(names, scene_);
+  const std::string materials = materialLibrary(names, scene_, bodyColors);
   writeFileAtomically(materialLibraryPath(), materials);
   bytes_.store(materials.size(), std::memory_order_relaxed);
 }

@@ -33,9 +33,12 @@ class ObjSequenceWriter : public FrameSink {
   /// `scene` becomes the file name stem: it must be non-empty and hold no '/' or whitespace.
   /// Body names are written with whitespace replaced by '_' and made unique. Throws
   /// softbake::Error.
+  /// `bodyColors` are the bodies' colours in the material library (linear RGB 0..1, as the
+  /// scene's `color` keys give them); a body without one, or with a negative red, takes the
+  /// palette.
   ObjSequenceWriter(std::shared_ptr<const SceneTopology> topology,
                     const std::filesystem::path& outputDirectory, std::string scene,
-                    int framePadding = 4);
+                    int framePadding = 4, std::vector<Vec3f> bodyColors = {});
 
   /// Throws softbake::Error naming the file, and the body and frame, for a position, normal or
   /// time that is not finite, or naming the file when writing fails; no file is left behind for

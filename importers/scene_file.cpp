@@ -419,6 +419,10 @@ class SceneParser {
       if (auto fov = c.find("fov")) render.fovDegrees = float(fov->numberIn(1, 170));
       if (render.cameraPosition.has_value() != render.cameraTarget.has_value())
         camera->fail("expected both 'position' and 'target', or neither (automatic framing)");
+      // Checked here, with its key path, not when the first frame renders (after other outputs
+      // have been written, or never with --no-render).
+      if (render.cameraPosition && *render.cameraPosition == *render.cameraTarget)
+        c.at("target").fail("the camera's target is its position: it would look nowhere");
     }
     if (auto spheres = object.find("contact_spheres")) render.contactSpheres = spheres->boolean();
     if (auto color = object.find("contact_color")) render.contactColor = colour(*color);

@@ -322,6 +322,25 @@ TEST(ObjSequenceWriter, NamesFilesByPaddedFrameNumber) {
   EXPECT_THROW(ObjSequenceWriter(world, dir.path(), "my scene"), Error);
 }
 
+TEST(ObjSequenceWriter, MaterialLibraryTakesTheScenesBodyColours) {
+  const auto world = makeBallsTopology({1.0f, 0.8f, 0.6f});
+  ScratchDirectory dir;
+  // Ball 0 red, ball 1 the palette (negative red), ball 2 beyond the list: the palette.
+  ObjSequenceWriter writer(world, dir.path(), "balls", 4,
+                           {Vec3f(1, 0, 0), Vec3f(-1, -1, -1)});
+  const std::string library = readFile(writer.materialLibraryPath());
+  EXPECT_NE(library.find("newmtl ball0\nKd 1.000 0.000 0.000\n"), std::string::npos) << library;
+  ObjSequenceWriter palette(world, dir.path() / "palette", "balls");
+  const std::string defaults = readFile(palette.materialLibraryPath());
+  const auto kd = [](const std::string& text, const std::string& material) {
+    const std::size_t at = text.find("newmtl " + material + "\nKd ");
+    return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at + 15) - at);
+  };
+  EXPECT_EQ(kd(library, "ball1"), kd(defaults, "ball1"));
+  EXPECT_EQ(kd(library, "ball2"), kd(defaults, "ball2"));
+  EXPECT_NE(kd(library, "ball0"), kd(defaults, "ball0"));
+}
+
 TEST(ObjSequenceWriter, MaterialLibraryHasADistinctColourPerBody) {
   const auto world = makeBallsTopology({1.0f, 0.8f, 0.6f});
   ScratchDirectory dir;
