@@ -27,6 +27,7 @@
 #include "output/cache_writer.hpp"
 #include "output/frame_pipeline.hpp"
 #include "output/manifest.hpp"
+#include "render/egl_context.hpp"
 #include "render/png_sequence_renderer.hpp"
 
 namespace softbake {
@@ -298,6 +299,12 @@ int run(const RunOptions& options) {
         "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
         "framed on the first frame\n");
   const char upAxis = options.upAxis ? (*options.upAxis)[0] : 'y';
+
+  // The renderer needs an EGL driver: found out now, before any file is written, not when the
+  // first frame renders (after the whole simulation, when frames render from the cache).
+  if (scene.output.png && !options.cacheOnly) {
+    const EglContext probe(render.egl);
+  }
 
   // Everything above validated the input: only now is anything written.
   makeDirectories(options.out);

@@ -441,6 +441,8 @@ TEST_F(CliTest, RendererStartFailureIsAClearError) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << output;
   EXPECT_NE(output.find("libegl-mesa0"), std::string::npos) << output;
   EXPECT_NE(output.find("--no-render"), std::string::npos) << output;
+  // Found before anything was written: no .mtl, no OBJ frame, no folder.
+  EXPECT_FALSE(fs::exists(folder_ / "bad")) << output;
 }
 
 TEST_F(CliTest, VdbFramesAreWrittenAndListedInTheManifest) {
