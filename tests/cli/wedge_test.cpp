@@ -70,8 +70,8 @@ TEST_F(CliTest, AWedgeRefusesAPathTheSceneLacksAndABadValueByVariant) {
   EXPECT_NE(path.output.find("--vary bodies[5].mass: the scene has no bodies[5]"),
             std::string::npos)
       << path.output;
-  const Result value = runSoftbake("wedge " + quoted(scene) +
-                                   " --vary 'bodies[1].mass=2,-1' -o " + quoted(folder_ / "b"));
+  const Result value = runSoftbake("wedge " + quoted(scene) + " --vary 'bodies[1].mass=2,-1' -o " +
+                                   quoted(folder_ / "b"));
   EXPECT_EQ(value.exitCode, 1);
   EXPECT_NE(value.output.find("wedge variant wedge_001 (bodies[1].mass=-1)"), std::string::npos)
       << value.output;
@@ -85,9 +85,9 @@ TEST_F(CliTest, AWedgeRefusesAPathTheSceneLacksAndABadValueByVariant) {
 TEST_F(CliTest, WedgeVariantsBakeToWhatASingleRunWrites) {
   const fs::path scene = writeScene("pair.json", kScene);
   const fs::path out = folder_ / "wedge";
-  const Result result = runSoftbake("wedge " + quoted(scene) +
-                                    " --vary 'bodies[1].mass=0.5,2' -o " + quoted(out) +
-                                    " -- --vdb --voxel-size 0.05");
+  const Result result =
+      runSoftbake("wedge " + quoted(scene) + " --vary 'bodies[1].mass=0.5,2' -o " + quoted(out) +
+                  " -- --vdb --voxel-size 0.05");
   ASSERT_EQ(result.exitCode, 0) << result.output;
   for (const char* name : {"wedge_000", "wedge_001"}) {
     const fs::path single = folder_ / (std::string("single_") + name);
@@ -146,8 +146,7 @@ TEST_F(CliTest, VerifyFindsEveryKindOfHole) {
   ASSERT_EQ(runSoftbake("run " + quoted(scene) + " -o " + quoted(out) + " -q").exitCode, 0);
   const Result whole = runSoftbake("verify " + quoted(out));
   EXPECT_EQ(whole.exitCode, 0) << whole.output;
-  EXPECT_NE(whole.output.find("whole: 3 sequences of 6 frames"), std::string::npos)
-      << whole.output;
+  EXPECT_NE(whole.output.find("whole: 3 sequences of 6 frames"), std::string::npos) << whole.output;
 
   fs::remove(out / "obj/pair_0003.obj");
   fs::copy_file(out / "contacts/pair_0002.json", out / "contacts/pair_00002.json");

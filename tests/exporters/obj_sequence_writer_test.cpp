@@ -326,8 +326,7 @@ TEST(ObjSequenceWriter, MaterialLibraryTakesTheScenesBodyColours) {
   const auto world = makeBallsTopology({1.0f, 0.8f, 0.6f});
   ScratchDirectory dir;
   // Ball 0 red, ball 1 the palette (negative red), ball 2 beyond the list: the palette.
-  ObjSequenceWriter writer(world, dir.path(), "balls", 4,
-                           {Vec3f(1, 0, 0), Vec3f(-1, -1, -1)});
+  ObjSequenceWriter writer(world, dir.path(), "balls", 4, {Vec3f(1, 0, 0), Vec3f(-1, -1, -1)});
   const std::string library = readFile(writer.materialLibraryPath());
   EXPECT_NE(library.find("newmtl ball0\nKd 1.000 0.000 0.000\n"), std::string::npos) << library;
   ObjSequenceWriter palette(world, dir.path() / "palette", "balls");

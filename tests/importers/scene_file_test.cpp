@@ -414,9 +414,10 @@ TEST(SceneFile, RenderKeyErrorsNameTheKeyPath) {
               ::testing::HasSubstr("render.size: expected [width, height]"));
   EXPECT_THAT(sceneError(R"({"render": {"camera": {"position": [0, 1, 2]}}, )" + body + "}"),
               ::testing::HasSubstr("render.camera: expected both"));
-  EXPECT_THAT(sceneError(R"({"render": {"camera": {"position": [0, 1, 2], "target": [0, 1, 2]}}, )" +
-                         body + "}"),
-              ::testing::HasSubstr("render.camera.target: the camera's target is its position"));
+  EXPECT_THAT(
+      sceneError(R"({"render": {"camera": {"position": [0, 1, 2], "target": [0, 1, 2]}}, )" + body +
+                 "}"),
+      ::testing::HasSubstr("render.camera.target: the camera's target is its position"));
   EXPECT_THAT(
       sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "color": [2, 0, 0]}]})"),
       ::testing::HasSubstr("bodies[0].color"));
