@@ -63,11 +63,9 @@ int exportFrames(const ExportOptions& options) {
   const int checkpointEvery = recordedCheckpointInterval(manifest.run);
   const std::vector<std::string> differences =
       runRecordDifferences(manifest.run, runRecord(run, scene, checkpointEvery));
-  if (!differences.empty()) {
-    std::string list;
-    for (const std::string& difference : differences) list += cat("\n  ", difference);
-    throw Error(cat("export: the run in ", source, " was made from other inputs:", list));
-  }
+  if (!differences.empty())
+    throw Error(cat("export: the run in ", source,
+                    " was made from other inputs:", listedDifferences(differences)));
   const FrameRange range = parseFrameRange(options.frames, manifest.framesWritten);
 
   if (!options.all) {
@@ -79,8 +77,7 @@ int exportFrames(const ExportOptions& options) {
     scene.output.mdd = options.mdd;
   }
   const bool pointCaches = scene.output.pc2 || scene.output.mdd;
-  if (pointCaches && !options.frames.empty() &&
-      parseFrameRange(options.frames, manifest.framesWritten).first != 1)
+  if (pointCaches && range.first != 1)
     throw Error(
         "export: point caches hold every frame: export --pc2 and --mdd without --frames, "
         "or from frame 1");

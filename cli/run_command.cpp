@@ -240,8 +240,9 @@ int restoreForResume(const Manifest& manifest, const WritePlan& plan,
   return checkpoint->frame;
 }
 
-/// The manifest a resumed run continues: there must be one, of the same run.
-Manifest manifestToResume(const RunOptions& options, const nlohmann::ordered_json& record) {
+/// A resumed run continues a manifest in its folder, of the same run: throws softbake::Error
+/// saying what changed otherwise.
+void requireSameRun(const RunOptions& options, const nlohmann::ordered_json& record) {
   Manifest previous;
   try {
     previous = readManifest(options.out);
@@ -249,14 +250,10 @@ Manifest manifestToResume(const RunOptions& options, const nlohmann::ordered_jso
     throw Error(cat("--resume: ", error.what()));
   }
   const std::vector<std::string> differences = runRecordDifferences(previous.run, record);
-  if (!differences.empty()) {
-    std::string list;
-    for (const std::string& difference : differences) list += cat("\n  ", difference);
+  if (!differences.empty())
     throw Error(cat("--resume: ", (options.out / "manifest.json").string(),
-                    " records another run; what changed:", list,
+                    " records another run; what changed:", listedDifferences(differences),
                     "\nRun again without --resume to start over."));
-  }
-  return previous;
 }
 
 int run(const RunOptions& options) {
@@ -284,8 +281,7 @@ int run(const RunOptions& options) {
   const int checkpointEvery = checkpointInterval(options, simulator);
   const nlohmann::ordered_json record = runRecord(options, scene, checkpointEvery);
   const int frames = topology.settings.frames;
-  std::optional<Manifest> previous;
-  if (options.resume) previous = manifestToResume(options, record);
+  if (options.resume) requireSameRun(options, record);
 
   // With the cache, PNG frames are rendered from it once the shot is simulated, the camera framed
   // on all of it, and the point caches, which need every frame in order, are written from it too;

@@ -131,6 +131,12 @@ std::vector<std::string> runRecordDifferences(const Json& before, const Json& no
   return differences;
 }
 
+std::string listedDifferences(const std::vector<std::string>& differences) {
+  std::string list;
+  for (const std::string& difference : differences) list += cat("\n  ", difference);
+  return list;
+}
+
 RunOptions runOptionsFromRecord(const Json& record, const fs::path& outputDirectory,
                                 std::string_view source) {
   RunOptions options;

@@ -31,6 +31,9 @@ nlohmann::ordered_json runRecord(const RunOptions& options, const SceneFile& sce
 std::vector<std::string> runRecordDifferences(const nlohmann::ordered_json& before,
                                               const nlohmann::ordered_json& now);
 
+/// `differences` as an error message lists them: each on a line of its own, indented.
+std::string listedDifferences(const std::vector<std::string>& differences);
+
 /// The options a recorded run was made with, its input and output folder included, for commands
 /// that rebuild its writers. Throws softbake::Error naming `source` for a record it cannot read.
 RunOptions runOptionsFromRecord(const nlohmann::ordered_json& record,

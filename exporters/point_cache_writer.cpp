@@ -142,9 +142,10 @@ void PointCacheWriter::closeAndRemoveTemporaries() {
 void PointCacheWriter::write(const Frame& frame) {
   if (streams_.empty()) {
     // Opened by the first frame, headers written with the counts of a complete run.
+    const std::vector<PointCacheFiles> files = this->files();
     for (std::size_t b = 0; b < stems_.size(); ++b) {
       Stream stream;
-      stream.path = outputDirectory_ / files()[b].cache;
+      stream.path = outputDirectory_ / files[b].cache;
       stream.temporary = stream.path.parent_path() /
                          cat(".", stream.path.filename().string(), ".tmp-", long(::getpid()), "-",
                              temporaryCounter.fetch_add(1, std::memory_order_relaxed));
