@@ -34,17 +34,17 @@ class ForwardingLogger final : public Assimp::Logger {
   }
 };
 
+}  // namespace
+
 // Installed before the first capture opens and never replaced: DefaultLogger::set() deletes the
 // logger it replaces, which another thread might be logging into at that moment.
-void installForwardingLogger() {
+void installAssimpLogging() {
   static std::once_flag installed;
   std::call_once(installed, [] { Assimp::DefaultLogger::set(new ForwardingLogger); });
 }
 
-}  // namespace
-
 AssimpLogCapture::AssimpLogCapture() : outer_(openCapture) {
-  installForwardingLogger();
+  installAssimpLogging();
   openCapture = this;
 }
 

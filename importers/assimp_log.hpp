@@ -46,6 +46,11 @@ class AssimpLogCapture {
   AssimpLogCapture* outer_;
 };
 
+/// Installs softbake's logger into assimp, once per process; AssimpLogCapture does it too. A
+/// process that forks to read a file calls it first, so the child never runs the one-time set-up
+/// (and its lock) that another thread of the parent might have been inside when it forked.
+void installAssimpLogging();
+
 /// "a.fbx: assimp: FBX-DOM: unsupported, newer format version, … (3 times)": one line per
 /// message, at most `maxLines`, then one that says how many more there were (`unkept` of them
 /// beyond those in the list).

@@ -67,7 +67,8 @@ using AssimpRead = std::function<const aiScene*(Assimp::Importer& importer, unsi
 /// `postProcess` is the post-processing done after validation.
 AssimpSnapshot takeAssimpSnapshot(const AssimpRead& read, unsigned postProcess);
 
-/// takeAssimpSnapshot() in a forked child. Throws softbake::Error starting with `file` when the
+/// takeAssimpSnapshot() in a forked child (in this process in a ThreadSanitizer build: the .cpp
+/// says why). Throws softbake::Error starting with `file` when the
 /// child dies (a crash inside assimp) or sends back less than a whole snapshot.
 AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postProcess,
                                          const std::string& file);
