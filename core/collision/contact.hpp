@@ -15,9 +15,10 @@ enum class ContactKind : std::uint8_t {
   EdgeTriangle,      ///< an edge of surface A crosses a triangle of surface B (the paper's §2.3)
   ParticleTriangle,  ///< a particle of A crossed a triangle of B during the step: case 1 of §2.4
   Corner,            ///< a particle of A crossed two triangles of B at an angle: case 2 of §2.4
+  Plane,             ///< a particle of body A touches ground plane B (an index into the planes)
 };
 
-/// "edge-triangle", "particle-triangle", "corner": the names the contact files use.
+/// "edge-triangle", "particle-triangle", "corner", "plane": the names the contact files use.
 constexpr std::string_view contactKindName(ContactKind kind) {
   switch (kind) {
     case ContactKind::EdgeTriangle:
@@ -26,6 +27,8 @@ constexpr std::string_view contactKindName(ContactKind kind) {
       return "particle-triangle";
     case ContactKind::Corner:
       return "corner";
+    case ContactKind::Plane:
+      return "plane";
   }
   return "edge-triangle";
 }
@@ -33,8 +36,9 @@ constexpr std::string_view contactKindName(ContactKind kind) {
 struct Contact {
   Vec3 position = Vec3::Zero();  ///< the intersection point (the paper's grey spheres)
   Vec3 normal = Vec3::Zero();    ///< of the struck surface, pointing to where A came from
-  Index surfaceA = kNoIndex,
-        surfaceB = kNoIndex;   ///< collision surfaces: bodies, then static meshes
+  /// Collision surfaces: bodies, then static meshes. For a plane contact, surfaceB is the plane's
+  /// index in SceneTopology::planes.
+  Index surfaceA = kNoIndex, surfaceB = kNoIndex;
   Index triangleA = kNoIndex;  ///< the crossing edge's triangle; kNoIndex for particle contacts
   Index triangleB = kNoIndex;  ///< the struck triangle (for a corner: the first of the two)
   Index particle = kNoIndex;   ///< the crossing particle; kNoIndex for edge contacts
