@@ -476,6 +476,8 @@ int run(const RunOptions& options) {
         result.totals.contacts, result.totals.responses.particleResponses,
         result.totals.responses.cornerResponses, result.totals.responses.edgePushes,
         result.totals.planeContacts);
+  else if (!simulator.topology().planes.empty())
+    std::printf("plane contacts over all substeps: %zu\n", result.totals.planeContacts);
   for (const OutputSequence& sequence : manifest.sequences)
     std::printf("%s sequence: %s\n", sequence.format.c_str(),
                 (options.out / sequence.pattern).string().c_str());

@@ -152,6 +152,10 @@ void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
 void Simulator::advanceToFrame(int frame) {
   beginFrame();
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
+  // The collision stage refills contacts_ every substep; without it they would be last frame's.
+  if (!collides_) contacts_.clear();
+  appendPlaneContacts(*topology_, state_,
+                      topology_->settings.collisions.response != ResponseMode::None, contacts_);
 }
 
 SimulationCheckpoint Simulator::checkpoint() const {

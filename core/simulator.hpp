@@ -76,7 +76,8 @@ class Simulator {
   /// Time each stage of every following substep (off by default); read with lastStepTimes().
   void measureStages(bool on) { measureStages_ = on; }
   const StageTimes& lastStepTimes() const { return stepTimes_; }
-  /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f.
+  /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f, with
+  /// the particles touching a plane then (ContactKind::Plane) after the others.
   const std::vector<Contact>& contacts() const { return contacts_; }
   /// The triangle pairs that intersect at the start, found when the simulator was made; what is
   /// done with them is settings.collisions.initial_overlap.

@@ -25,9 +25,15 @@ ContactWriter::ContactWriter(const SceneTopology& topology,
   }
   for (const StaticMeshCollider& collider : topology.staticMeshes)
     surfaceNames_.push_back(collider.name);
+  for (const PlaneCollider& plane : topology.planes) planeNames_.push_back(plane.name);
   for (const CollisionSurface& surface : topology.collision.surfaces)
     surfaceFirstTriangle_.push_back(surface.firstTriangle);
   makeDirectories(outputDirectory_ / naming_.folder);
+}
+
+const std::string& ContactWriter::partnerName(const Contact& contact) const {
+  return contact.kind == ContactKind::Plane ? planeNames_[contact.surfaceB]
+                                            : surfaceNames_[contact.surfaceB];
 }
 
 std::filesystem::path ContactWriter::framePath(int frameNumber) const {
@@ -49,8 +55,7 @@ std::string ContactWriter::frameJson(const Frame& frame) const {
         {"kind", contactKindName(c.kind)},
         {"position", vector(c.position)},
         {"normal", vector(c.normal)},
-        {"bodies",
-         nlohmann::ordered_json::array({surfaceNames_[c.surfaceA], surfaceNames_[c.surfaceB]})},
+        {"bodies", nlohmann::ordered_json::array({surfaceNames_[c.surfaceA], partnerName(c)})},
         {"triangles", nlohmann::ordered_json::array(
                           {local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB)})},
         {"particle", c.particle == kNoIndex
@@ -72,8 +77,7 @@ void ContactWriter::write(const Frame& frame) {
   requireFinite(path, frame.time, [&] { return cat("frame ", frame.number, ": the time"); });
   requireFiniteContacts(path, frame, [&](std::size_t i) {
     const Contact& c = frame.contacts[i];
-    return cat("contact ", i, " (", surfaceNames_[c.surfaceA], " on ", surfaceNames_[c.surfaceB],
-               ")");
+    return cat("contact ", i, " (", surfaceNames_[c.surfaceA], " on ", partnerName(c), ")");
   });
   const std::string text = frameJson(frame);
   writeFileAtomically(path, text);

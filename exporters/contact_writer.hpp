@@ -37,9 +37,13 @@ class ContactWriter : public FrameSink {
   std::string frameJson(const Frame& frame) const;
 
  private:
+  /// What the contact's surface A met: a body or static mesh, or a plane.
+  const std::string& partnerName(const Contact& contact) const;
+
   std::filesystem::path outputDirectory_;
   FrameNaming naming_;
   std::vector<std::string> surfaceNames_;
+  std::vector<std::string> planeNames_;
   std::vector<Index> surfaceFirstTriangle_;
   std::vector<Index> bodyFirstParticle_;
   std::atomic<std::uint64_t> bytes_{0};

@@ -216,8 +216,7 @@ class Simulation {
       contact["kind"] = std::string(contactKindName(c.kind));
       contact["position"] = triple(c.position);
       contact["normal"] = triple(c.normal);
-      contact["bodies"] =
-          py::make_tuple(topology.surfaceName(c.surfaceA), topology.surfaceName(c.surfaceB));
+      contact["bodies"] = py::make_tuple(topology.surfaceName(c.surfaceA), topology.partnerName(c));
       contact["triangles"] =
           py::make_tuple(local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB));
       contact["particle"] =
@@ -416,7 +415,7 @@ so it changes when advance() runs (copy it to keep a frame), and it keeps the Si
           py::arg("body"), "The velocities of `body` (m/s), a view like positions().")
       .def("contacts", &Simulation::contacts, R"doc(
 The contacts of the latest frame's last substep, as the contacts JSON files list them: a list of
-dicts with kind ('edge-triangle', 'particle-triangle' or 'corner'), position and normal
+dicts with kind ('edge-triangle', 'particle-triangle', 'corner' or 'plane'), position and normal
 (x, y, z), bodies (the two surfaces' names), triangles (each surface's own triangle index, or
 None) and particle (the crossing particle's index in its body, or None).
 )doc")

@@ -61,4 +61,27 @@ std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const 
       std::plus<>());
 }
 
+void appendPlaneContacts(const SceneTopology& topology, const SimulationState& state, bool respond,
+                         std::vector<Contact>& contacts) {
+  // A relative margin: the particle was put at `skin` by one addition, so it lies within a few
+  // ulps of it.
+  const Scalar reach = respond ? topology.settings.skin * Scalar(1.001) : Scalar(0);
+  for (std::size_t p = 0; p < topology.planes.size(); ++p) {
+    const PlaneCollider& plane = topology.planes[p];
+    for (std::size_t i = 0; i < state.particleCount(); ++i) {
+      if (topology.inverseMass[i] == 0) continue;  // pinned: the plane pass leaves them alone
+      const Vec3& x = state.position[i];
+      const Scalar height = heightAbove(plane, x);
+      if (height >= reach) continue;
+      Contact& contact = contacts.emplace_back();
+      contact.kind = ContactKind::Plane;
+      contact.position = x - height * plane.normal;
+      contact.normal = plane.normal;
+      contact.surfaceA = topology.particleBody[i];
+      contact.surfaceB = Index(p);
+      contact.particle = Index(i);
+    }
+  }
+}
+
 }  // namespace softbake

@@ -4,7 +4,9 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
+#include "core/collision/contact.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -22,6 +24,14 @@ std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const 
                                  std::span<std::int32_t> touchedPlane = {});
 
 inline constexpr std::int32_t kNoPlane = -1;
+
+/// Appends to `contacts` one ContactKind::Plane contact for every particle in contact with a plane
+/// now: at the point of the plane under it, with the plane's normal, in particle order (so the
+/// list is the same for any thread count). In contact means within the skin (with `respond`: the
+/// plane pass leaves a touching particle exactly at the skin, which rounding may put a hair
+/// above), or behind the plane without response (what the detector found, the paper's figure 5b).
+void appendPlaneContacts(const SceneTopology& topology, const SimulationState& state, bool respond,
+                         std::vector<Contact>& contacts);
 
 /// How far `x` lies above `plane`, along its normal (negative behind it).
 inline Scalar heightAbove(const PlaneCollider& plane, const Vec3& x) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/collision/contact.hpp"
 #include "core/collision/geometry.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/types.hpp"
@@ -85,6 +86,11 @@ struct SceneTopology {
   const std::string& surfaceName(Index surface) const {
     return surface < bodies.size() ? bodies[surface].name
                                    : staticMeshes[surface - bodies.size()].name;
+  }
+  /// What surface A of `contact` met: a collision surface's name, or a plane's.
+  const std::string& partnerName(const Contact& contact) const {
+    return contact.kind == ContactKind::Plane ? planes[contact.surfaceB].name
+                                              : surfaceName(contact.surfaceB);
   }
   /// The body's triangles, in global particle indices.
   std::span<const Triangle> bodyTriangles(const Body& body) const {

@@ -59,5 +59,58 @@ TEST(PlaneContact, BallDroppedOnTheGroundNeverEndsAStepBelowIt) {
   EXPECT_LT(c.y(), 0.55);
 }
 
+// The frame's plane contacts, checked against every particle's height: a particle is listed when
+// it is within `listedBelow` of the plane and never when it is above `neverAbove`.
+void expectPlaneContactsMatchHeights(const Simulator& simulator, Scalar listedBelow,
+                                     Scalar neverAbove) {
+  const SimulationState& state = simulator.state();
+  std::vector<char> listed(state.particleCount(), 0);
+  for (const Contact& c : simulator.contacts()) {
+    ASSERT_EQ(c.kind, ContactKind::Plane);
+    ASSERT_LT(c.particle, state.particleCount());
+    EXPECT_EQ(listed[c.particle], 0) << "particle " << c.particle << " listed twice";
+    listed[c.particle] = 1;
+    const Vec3& x = state.position[c.particle];
+    EXPECT_EQ(c.surfaceA, 0u);
+    EXPECT_EQ(c.surfaceB, 0u);
+    EXPECT_EQ(c.normal, Vec3(0, 1, 0));
+    EXPECT_NEAR(c.position.y(), 0, 1e-6) << "on the plane";
+    EXPECT_EQ(c.position.x(), x.x());
+    EXPECT_EQ(c.position.z(), x.z());
+    EXPECT_LT(x.y(), neverAbove);
+  }
+  for (std::size_t i = 0; i < state.particleCount(); ++i) {
+    const bool low = state.position[i].y() < listedBelow;
+    EXPECT_TRUE(!low || listed[i]) << "particle " << i << " is on the plane but not listed";
+  }
+}
+
+TEST(PlaneContact, AFrameListsTheParticlesOnTheGroundAndNoneInFlight) {
+  Simulator simulator(buildSceneTopology(test::ballScene(*findMaterialPreset("rubber"))));
+  const Scalar skin = simulator.topology().settings.skin;
+  simulator.advanceToFrame(2);
+  EXPECT_TRUE(simulator.contacts().empty()) << "the ball starts half a metre up";
+  std::size_t mostOnTheGround = 0;
+  for (int frame = 3; frame <= 48; ++frame) {
+    simulator.advanceToFrame(frame);
+    expectPlaneContactsMatchHeights(simulator, skin, skin * 1.01f);
+    mostOnTheGround = std::max(mostOnTheGround, simulator.contacts().size());
+  }
+  EXPECT_GT(mostOnTheGround, 3u) << "the ball came to rest on more than a few particles";
+}
+
+TEST(PlaneContact, DetectionOnlyListsTheParticlesBehindThePlane) {
+  SceneSetup setup = test::ballScene(*findMaterialPreset("rubber"));
+  setup.settings.collisions.response = ResponseMode::None;
+  Simulator simulator(buildSceneTopology(setup));
+  std::size_t mostBehind = 0;
+  for (int frame = 2; frame <= 24; ++frame) {
+    simulator.advanceToFrame(frame);
+    expectPlaneContactsMatchHeights(simulator, 0, 0);
+    mostBehind = std::max(mostBehind, simulator.contacts().size());
+  }
+  EXPECT_GT(mostBehind, 100u) << "the ball fell through the ground, seen by the detector";
+}
+
 }  // namespace
 }  // namespace softbake

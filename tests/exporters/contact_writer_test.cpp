@@ -58,6 +58,36 @@ TEST(ContactWriter, WritesEachFramesContactsWithNamesAndLocalIndices) {
   EXPECT_GT(writer.bytesWritten(), 0u);
 }
 
+TEST(ContactWriter, APlaneContactNamesThePlaneAndHasNoTriangles) {
+  test::ScratchDirectory out;
+  SceneTopology world = *test::makeBallsTopology({0.5f, 0.5f});
+  world.planes.push_back(PlaneCollider{.name = "floor"});
+  world.planes.push_back(PlaneCollider{.name = "wall", .normal = Vec3(1, 0, 0)});
+  ContactWriter writer(world, out.path(), "balls", 4);
+
+  Frame frame;
+  frame.number = 2;
+  frame.positions = world.restPosition;
+  Contact onWall;
+  onWall.kind = ContactKind::Plane;
+  onWall.position = Vec3(0, 1, 0);
+  onWall.normal = Vec3(1, 0, 0);
+  onWall.surfaceA = 1;
+  onWall.surfaceB = 1;
+  onWall.particle = world.bodies[1].firstParticle + 4;
+  frame.contacts = {onWall};
+  writer.write(frame);
+
+  const nlohmann::json json = nlohmann::json::parse(test::readFile(writer.framePath(2)));
+  ASSERT_EQ(json.at("contacts").size(), 1u);
+  const nlohmann::json& contact = json["contacts"][0];
+  EXPECT_EQ(contact.at("kind"), "plane");
+  EXPECT_EQ(contact.at("bodies"), nlohmann::json::array({"ball1", "wall"}));
+  EXPECT_EQ(contact.at("triangles"), nlohmann::json::array({nullptr, nullptr}));
+  EXPECT_EQ(contact.at("particle"), 4);
+  EXPECT_EQ(contact.at("normal"), nlohmann::json::array({1.0, 0.0, 0.0}));
+}
+
 TEST(ContactWriter, SequenceIsNamedLikeTheObjSequence) {
   test::ScratchDirectory out;
   const auto world = test::makeBallsTopology({0.5f});

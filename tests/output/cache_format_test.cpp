@@ -42,7 +42,10 @@ Frame sampleFrame() {
   Contact corner = edge;
   corner.kind = ContactKind::Corner;
   corner.triangleA = kNoIndex, corner.particle = 2;
-  frame.contacts = {edge, corner};
+  Contact plane = corner;
+  plane.kind = ContactKind::Plane;
+  plane.triangleB = kNoIndex, plane.surfaceB = 0, plane.particle = 1;
+  frame.contacts = {edge, corner, plane};
   return frame;
 }
 
@@ -57,8 +60,8 @@ TEST(CacheFrame, ComesBackAsItWentIn) {
     EXPECT_EQ(back.positions[i], frame.positions[i]) << i;
     EXPECT_EQ(back.velocities[i], frame.velocities[i]) << i;
   }
-  ASSERT_EQ(back.contacts.size(), 2u);
-  for (std::size_t c = 0; c < 2; ++c) {
+  ASSERT_EQ(back.contacts.size(), 3u);
+  for (std::size_t c = 0; c < 3; ++c) {
     const Contact &a = frame.contacts[c], &b = back.contacts[c];
     EXPECT_EQ(b.position, a.position);
     EXPECT_EQ(b.normal, a.normal);
@@ -73,13 +76,13 @@ TEST(CacheFrame, ComesBackAsItWentIn) {
 
 TEST(CacheFrame, HasTheDocumentedLayout) {
   const std::string bytes = encodeCacheFrame(sampleFrame());
-  ASSERT_EQ(bytes.size(), 64u + 3 * 12 + 3 * 12 + 2 * 48);
+  ASSERT_EQ(bytes.size(), 64u + 3 * 12 + 3 * 12 + 3 * 48);
   EXPECT_EQ(std::string(bytes.data(), 8), std::string("SBCACHE\0", 8));
   EXPECT_EQ(at<std::uint32_t>(bytes, 8), 1u);   // version
   EXPECT_EQ(at<std::uint32_t>(bytes, 12), 1u);  // a frame
   EXPECT_EQ(at<std::int32_t>(bytes, 16), 37);
   EXPECT_EQ(at<std::uint32_t>(bytes, 20), 3u);  // particles
-  EXPECT_EQ(at<std::uint32_t>(bytes, 24), 2u);  // contacts
+  EXPECT_EQ(at<std::uint32_t>(bytes, 24), 3u);  // contacts
   EXPECT_EQ(at<std::uint32_t>(bytes, 28), 4u);  // float32
   EXPECT_EQ(at<double>(bytes, 32), 1.5);
   EXPECT_EQ(at<std::uint64_t>(bytes, 40), bytes.size() - 64);
@@ -98,6 +101,7 @@ TEST(CacheFrame, HasTheDocumentedLayout) {
   EXPECT_EQ(at<std::uint32_t>(bytes, corner + 32), 0xFFFFFFFFu);  // no triangle A
   EXPECT_EQ(at<std::uint32_t>(bytes, corner + 40), 2u);           // particle
   EXPECT_EQ(at<std::uint8_t>(bytes, corner + 44), 2u);            // corner
+  EXPECT_EQ(at<std::uint8_t>(bytes, corner + 48 + 44), 3u);       // plane
 }
 
 TEST(CacheFrame, EveryChangedByteIsAnErrorNamingTheFile) {
