@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "exporters/texcoord_table.hpp"
 #include "output/atomic_file.hpp"
 #include "output/finite_values.hpp"
 #include "output/version.hpp"
@@ -113,10 +114,10 @@ std::string materialLibrary(const std::vector<std::string>& names, const std::st
   return text;
 }
 
-std::string texcoordLines(const RenderMesh& render) {
+std::string texcoordLines(const TexcoordTable& table) {
   std::string text;
-  text.reserve(render.uvs.size() * 24);
-  for (const Vec2f& uv : render.uvs) {
+  text.reserve(table.uvs.size() * 24);
+  for (const Vec2f& uv : table.uvs) {
     char line[kMaxLine];
     char* p = putText(line, "vt ");
     p = putNumber(p, uv.x());
@@ -130,9 +131,9 @@ std::string texcoordLines(const RenderMesh& render) {
 
 // `firstTexcoord` is the 1-based OBJ index of the body's first vt.
 std::string faceLines(const SceneTopology& topology, const Body& body, const std::string& material,
-                      std::uint64_t firstTexcoord) {
+                      const TexcoordTable& texcoords, std::uint64_t firstTexcoord) {
   std::string text = cat("usemtl ", material, "\ns 1\n");
-  const bool hasUvs = !body.render.uvs.empty();
+  const bool hasUvs = !texcoords.uvs.empty();
   text.reserve(text.size() + std::size_t(body.triangleCount) * (hasUvs ? 40 : 30));
   for (Index t = 0; t < body.triangleCount; ++t) {
     const Triangle& triangle = topology.triangles[body.firstTriangle + t];
@@ -145,7 +146,7 @@ std::string faceLines(const SceneTopology& topology, const Body& body, const std
       *p++ = ' ';
       p = putText(p, std::string_view(index, std::size_t(indexEnd - index)));
       *p++ = '/';
-      if (hasUvs) p = putNumber(p, firstTexcoord + body.render.renderTriangles[t][corner]);
+      if (hasUvs) p = putNumber(p, firstTexcoord + texcoords.corners[t][corner]);
       *p++ = '/';
       p = putText(p, std::string_view(index, std::size_t(indexEnd - index)));
     }
@@ -209,9 +210,10 @@ ObjSequenceWriter::ObjSequenceWriter(std::shared_ptr<const SceneTopology> topolo
   std::uint64_t firstTexcoord = 1;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const Body& body = bodies[b];
-    text_.push_back({cat("o ", names[b], "\n"), texcoordLines(body.render),
-                     faceLines(*topology_, body, names[b], firstTexcoord)});
-    firstTexcoord += body.render.uvs.size();
+    const TexcoordTable texcoords = texcoordTable(body.render);
+    text_.push_back({cat("o ", names[b], "\n"), texcoordLines(texcoords),
+                     faceLines(*topology_, body, names[b], texcoords, firstTexcoord)});
+    firstTexcoord += texcoords.uvs.size();
   }
 
   makeDirectories(objDirectory_);

@@ -18,7 +18,8 @@
 namespace softbake {
 
 /// Writes OUT/obj/<scene>_0001.obj, _0002.obj, ... (the frame number, zero-padded) and
-/// OUT/obj/<scene>.mtl. Each body is an `o` block with its particles (`v`), its source UVs (`vt`),
+/// OUT/obj/<scene>.mtl. Each body is an `o` block with its particles (`v`), its source UVs (`vt`,
+/// each distinct UV once, in order of first use: texcoord_table.hpp),
 /// smooth normals of the deformed surface (`vn`) and its triangles (`f v/vt/vn`, or `f v//vn`
 /// without UVs), so an importer sees one mesh per body with the original texture layout.
 ///
@@ -59,7 +60,7 @@ class ObjSequenceWriter : public FrameSink {
   /// The per-body text that does not change between frames.
   struct BodyText {
     std::string object;     ///< "o name\n"
-    std::string texcoords;  ///< every "vt" line
+    std::string texcoords;  ///< every "vt" line, one per distinct UV
     std::string faces;      ///< "usemtl", "s 1" and every "f" line
   };
 

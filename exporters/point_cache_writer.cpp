@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "exporters/texcoord_table.hpp"
 #include "output/atomic_file.hpp"
 #include "output/finite_values.hpp"
 
@@ -82,21 +83,21 @@ void writeRestMeshes(const SceneTopology& topology, const std::filesystem::path&
         text += k < 2 ? ' ' : '\n';
       }
     }
-    const RenderMesh& render = body.render;
-    for (const Vec2f& uv : render.uvs) {
+    const TexcoordTable texcoords = texcoordTable(body.render);
+    for (const Vec2f& uv : texcoords.uvs) {
       text += "vt ";
       appendNumber(text, uv.x());
       text += ' ';
       appendNumber(text, uv.y());
       text += '\n';
     }
-    const bool hasUvs = !render.uvs.empty();
+    const bool hasUvs = !texcoords.uvs.empty();
     const std::span<const Triangle> triangles = topology.bodyTriangles(body);
     for (std::size_t t = 0; t < triangles.size(); ++t) {
       text += 'f';
       for (int corner = 0; corner < 3; ++corner) {
         text += cat(' ', triangles[t][corner] - body.firstParticle + 1);
-        if (hasUvs) text += cat('/', render.renderTriangles[t][corner] + 1);
+        if (hasUvs) text += cat('/', texcoords.corners[t][corner] + 1);
       }
       text += '\n';
     }

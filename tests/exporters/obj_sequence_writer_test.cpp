@@ -4,6 +4,7 @@
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <assimp/Importer.hpp>
 #include <charconv>
 #include <cmath>
@@ -184,10 +185,15 @@ TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
   ASSERT_EQ(obj.v.size(), frame.positions.size());
   for (std::size_t i = 0; i < obj.v.size(); ++i) EXPECT_EQ(obj.v[i], frame.positions[i]) << i;
 
+  // Each distinct UV once per body, in order of first use by its faces.
   std::vector<Vec2f> uvs;
   std::vector<Vec3d> normals;
   for (const Body& body : world->bodies) {
-    uvs.insert(uvs.end(), body.render.uvs.begin(), body.render.uvs.end());
+    const std::size_t first = uvs.size();
+    for (const Triangle& triangle : body.render.renderTriangles)
+      for (Index v : triangle)
+        if (std::find(uvs.begin() + long(first), uvs.end(), body.render.uvs[v]) == uvs.end())
+          uvs.push_back(body.render.uvs[v]);
     const std::vector<Vec3d> bodyNormals = referenceNormals(world, frame, body);
     normals.insert(normals.end(), bodyNormals.begin(), bodyNormals.end());
   }
@@ -202,20 +208,27 @@ TEST(ObjSequenceWriter, WritesExactShortestFormsAndGlobalIndices) {
   EXPECT_LE(worst, kNormalTolerance);
 
   ASSERT_EQ(obj.faces.size(), world->triangles.size());
-  long uvOffset = 0;
+  long uvBegin = 0;
   for (std::size_t b = 0; b < world->bodies.size(); ++b) {
     const Body& body = world->bodies[b];
     EXPECT_EQ(obj.facesPerObject[b], body.triangleCount);
+    long uvEnd = uvBegin;
     for (Index f = 0; f < body.triangleCount; ++f)
       for (int k = 0; k < 3; ++k) {
         const auto& corner = obj.faces[body.firstTriangle + f][k];
         const long particle = long(world->triangles[body.firstTriangle + f][k]) + 1;
         EXPECT_EQ(corner[0], particle);
-        EXPECT_EQ(corner[1], uvOffset + long(body.render.renderTriangles[f][k]) + 1);
+        // A body's faces use its own UVs, and the UV each corner had.
+        ASSERT_GT(corner[1], uvBegin);
+        ASSERT_LE(corner[1], long(obj.vt.size()));
+        EXPECT_EQ(obj.vt[std::size_t(corner[1] - 1)],
+                  body.render.uvs[body.render.renderTriangles[f][k]]);
+        uvEnd = std::max(uvEnd, corner[1]);
         EXPECT_EQ(corner[2], particle);
       }
-    uvOffset += long(body.render.uvs.size());
+    uvBegin = uvEnd;
   }
+  EXPECT_EQ(uvBegin, long(obj.vt.size()));
 }
 
 TEST(ObjSequenceWriter, HeaderNamesVersionFrameAndTime) {
