@@ -89,9 +89,10 @@ Differences that remain, and cannot be made equal:
     `"self_collision": false`; softbake's default is off for closed bodies, so Blender does
     that extra work.
   * The ground is a finite plane (large compared with the scene), not an infinite one.
-  * Pins: boxes pin through Blender's pin group; `pins.indices` (softbake's welded order) and
-    mesh formats other than OBJ, PLY and STL are unsupported: the script names those bodies and
-    exits with status 2.
+  * Pins: boxes pin through Blender's pin group; `pins.indices` (the file's vertex numbers,
+    which this script does not carry through Blender's importers), `pins.particles` (softbake's
+    welded order) and mesh formats other than OBJ, PLY and STL are unsupported: the script names
+    those bodies and exits with status 2.
 """
 
 import argparse
@@ -442,8 +443,9 @@ def build_scene(scene_json, base_dir, quality, frames):
     problems, bodies, faces = [], [], 0
     for index, body in enumerate(scene_json["bodies"]):
         name = body.get("name", f"body{index}")
-        if body.get("pins", {}).get("indices"):
-            problems.append(f"{name}: pins.indices (softbake's welded vertex order)")
+        pins = body.get("pins", {})
+        if pins.get("indices") or pins.get("particles"):
+            problems.append(f"{name}: pins.indices or pins.particles (pin with boxes)")
             continue
         try:
             for suffix, bm in shapes(body, base_dir):

@@ -280,6 +280,8 @@ AssimpSnapshot takeAssimpSnapshot(const AssimpRead& read, unsigned postProcess) 
   if (scene) {
     snapshot.loaderVertices = vertexCount(*scene);
     snapshot.loaderFaces = faceCount(*scene);
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+      snapshot.loaderMeshVertices.push_back(scene->mMeshes[m]->mNumVertices);
     snapshot.unusedVertices = unusedVertices(*scene);
     snapshot.emptyFaces = dropEmptyFaces(*scene);
     matchPrimitiveTypesToFaces(*scene);
@@ -305,6 +307,7 @@ bool writeAssimpSnapshot(int fd, const AssimpSnapshot& snapshot) {
   out.text(snapshot.error);
   out.number(snapshot.loaderVertices);
   out.number(snapshot.loaderFaces);
+  out.values(snapshot.loaderMeshVertices);
   out.number(snapshot.unusedVertices);
   out.number(snapshot.emptyFaces);
   out.number(snapshot.meshes.size());
@@ -342,6 +345,7 @@ AssimpSnapshot readAssimpSnapshot(int fd) {
   snapshot.error = in.text();
   snapshot.loaderVertices = in.number();
   snapshot.loaderFaces = in.number();
+  snapshot.loaderMeshVertices = in.values<std::uint64_t>();
   snapshot.unusedVertices = in.number();
   snapshot.emptyFaces = in.number();
   for (std::uint64_t meshes = in.number(); meshes > 0; --meshes) {

@@ -52,6 +52,9 @@ struct AssimpSnapshot {
   std::string error;
   /// The loader's scene, before post-processing: what the file held.
   std::uint64_t loaderVertices = 0, loaderFaces = 0;
+  /// Per mesh of the loader's scene, its vertices: where post-processing kept every mesh as it was,
+  /// a vertex's index is still the loader's (mesh_import.cpp numbers a file's vertices by it).
+  std::vector<std::uint64_t> loaderMeshVertices;
   std::uint64_t unusedVertices = 0;  ///< of loaderVertices, used by no face
   std::uint64_t emptyFaces = 0;      ///< faces with no corners, dropped (assimp_guards.hpp)
   std::vector<SnapshotMesh> meshes;

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <new>
 #include <optional>
@@ -190,6 +192,14 @@ TriangleMesh mergeAll(std::vector<TriangleMesh>& meshes, const std::filesystem::
 void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& options,
                    ImportedMeshes& result) {
   if (options.mergeMeshes) {
+    std::vector<Index> offsets;
+    Index offset = 0;
+    for (const TriangleMesh& mesh : result.meshes) {
+      offsets.push_back(offset);
+      offset += Index(mesh.positions.size());
+    }
+    for (FileVertexPlace& place : result.fileVertices.places)
+      if (place.mesh != FileVertexPlace::kNone) place = {0, offsets[place.mesh] + place.vertex};
     TriangleMesh merged = mergeAll(result.meshes, path, result.notes);
     result.meshes.clear();
     result.meshes.push_back(std::move(merged));
@@ -198,8 +208,77 @@ void arrangeMeshes(const std::filesystem::path& path, const MeshImportOptions& o
   }
 }
 
+std::string lowerExtension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
+// Only the vertices a triangle uses can be pinned: the others become no particle.
+std::vector<char> usedVertices(std::size_t vertices, const std::vector<Triangle>& triangles) {
+  std::vector<char> used(vertices, 0);
+  for (const Triangle& t : triangles)
+    for (Index v : t)
+      if (v < vertices) used[v] = 1;
+  return used;
+}
+
+// The file's numbering of `scene`, whose instance i became result mesh keptAs[i] (kNone: none).
+// `objText` is the file, for an OBJ.
+FileVertices numberFileVertices(const std::filesystem::path& path, const AssimpSnapshot& scene,
+                                const std::vector<MeshInstance>& instances,
+                                const std::vector<Index>& keptAs, bool ply,
+                                std::string_view objText) {
+  FileVertices numbering;
+  const std::string extension = lowerExtension(path);
+  if (extension == ".obj") {
+    // assimp made a vertex per face corner, so the `v` statements are matched by position. They
+    // are shared by all of the file's objects, which have no transforms: one space for all.
+    std::vector<ImportedVertices> meshes;
+    for (std::size_t i = 0; i < instances.size(); ++i)
+      if (keptAs[i] != FileVertexPlace::kNone)
+        meshes.push_back({keptAs[i], instances[i].mesh->positions, instances[i].mesh->triangles});
+    numbering.places = placeByPosition(objVertexPositions(objText), meshes);
+    return numbering;
+  }
+  // These loaders keep the file's vertices as the file lists them, one aiMesh after another.
+  const bool keepsOrder = ply || extension == ".off" || extension == ".stl" ||
+                          extension == ".gltf" || extension == ".glb";
+  if (!keepsOrder) {
+    numbering.unknown =
+        cat("softbake knows the vertex numbering of OBJ, PLY, OFF, STL and glTF "
+            "files only, not of '",
+            extension, "' files");
+    return numbering;
+  }
+  bool unchanged = scene.loaderMeshVertices.size() == scene.meshes.size();
+  for (std::size_t m = 0; unchanged && m < scene.meshes.size(); ++m)
+    unchanged = scene.loaderMeshVertices[m] == scene.meshes[m].positions.size();
+  if (!unchanged) {
+    numbering.unknown =
+        "assimp rebuilt the file's meshes (it mixes points or lines with faces), so their vertices "
+        "are no longer in the file's order";
+    return numbering;
+  }
+  // A mesh placed twice is numbered once in the file: its first placement is pinned.
+  std::vector<Index> firstKept(scene.meshes.size(), FileVertexPlace::kNone);
+  for (std::size_t i = instances.size(); i-- > 0;)
+    if (keptAs[i] != FileVertexPlace::kNone)
+      firstKept[std::size_t(instances[i].mesh - scene.meshes.data())] = keptAs[i];
+  for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
+    const SnapshotMesh& mesh = scene.meshes[m];
+    const std::vector<char> used = usedVertices(mesh.positions.size(), mesh.triangles);
+    for (Index v = 0; v < used.size(); ++v)
+      numbering.places.push_back(used[v] && firstKept[m] != FileVertexPlace::kNone
+                                     ? FileVertexPlace{firstKept[m], v}
+                                     : FileVertexPlace{});
+  }
+  return numbering;
+}
+
 ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImportOptions& options,
-                                const PlyPreparation* ply, const AssimpRead& read) {
+                                const PlyPreparation* ply, const AssimpRead& read,
+                                std::string_view objText) {
   const std::string file = path.string();
   // In a child process: a crash inside assimp ends there, as an error naming the file.
   const AssimpSnapshot scene = takeAssimpSnapshotInChild(read, kPostProcess, file);
@@ -247,10 +326,12 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
                       options.limits);
 
   DroppedPrimitives dropped;
-  for (const MeshInstance& instance : instances) {
-    TriangleMesh mesh = toTriangleMesh(file, instance, dropped);
+  std::vector<Index> keptAs(instances.size(), FileVertexPlace::kNone);
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    TriangleMesh mesh = toTriangleMesh(file, instances[i], dropped);
     if (mesh.triangles.empty()) continue;
     requireFinite(path, mesh);
+    keptAs[i] = Index(result.meshes.size());
     result.meshes.push_back(std::move(mesh));
   }
   if (dropped.points + dropped.lines > 0) {
@@ -262,6 +343,9 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
       throw Error(cat(file, ": no triangles (the file holds only points and lines)"));
     throw Error(cat(file, ": no triangles (the file holds no meshes)"));
   }
+  if (options.numberFileVertices)
+    result.fileVertices =
+        numberFileVertices(path, scene, instances, keptAs, ply != nullptr, objText);
   arrangeMeshes(path, options, result);
   return result;
 }
@@ -285,6 +369,11 @@ ImportedMeshes importPlyMesh(const std::filesystem::path& path, const MeshImport
   requireWithinLimits(path, mesh.positions.size(), mesh.triangles.size(), options.limits);
   mesh.name = path.stem().string();
   requireFinite(path, mesh);
+  if (options.numberFileVertices) {
+    // softbake's own reader keeps the vertex element's order.
+    for (Index v = 0; v < used.size(); ++v)
+      result.fileVertices.places.push_back(used[v] ? FileVertexPlace{0, v} : FileVertexPlace{});
+  }
   result.meshes.push_back(std::move(mesh));
   arrangeMeshes(path, options, result);
   return result;
@@ -312,10 +401,14 @@ class OneFileSystem : public Assimp::IOSystem {
   std::string_view bytes_;
 };
 
-std::string lowerExtension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return extension;
+// An OBJ's text, read a second time (assimp read it in its child) for its vertex numbering.
+std::string objTextToNumber(const std::filesystem::path& path, const MeshImportOptions& options) {
+  if (!options.numberFileVertices || lowerExtension(path) != ".obj") return {};
+  std::ifstream in(path, std::ios::binary);
+  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (!in.good() && !in.eof())
+    throw Error(cat(path.string(), ": cannot read the file to number its vertices"));
+  return text;
 }
 
 }  // namespace
@@ -341,7 +434,8 @@ ImportedMeshes importMeshFile(const std::filesystem::path& path, const MeshImpor
     }
     return importWithAssimp(
         path, options, ply ? &*ply : nullptr,
-        [&](Assimp::Importer& importer, unsigned flags) { return importer.ReadFile(file, flags); });
+        [&](Assimp::Importer& importer, unsigned flags) { return importer.ReadFile(file, flags); },
+        objTextToNumber(path, options));
   } catch (const std::bad_alloc&) {
     throw Error(
         cat(file, ": mesh too large for this machine: ran out of memory while importing it"));
@@ -361,12 +455,14 @@ ImportedMeshes importMeshBuffer(std::string_view bytes, const std::string& name,
       ply = preparePlyBuffer(bytes, name, options.limits);
       if (ply->mesh) return importPlyMesh(path, options, *ply);
     }
-    return importWithAssimp(path, options, ply ? &*ply : nullptr,
-                            [&](Assimp::Importer& importer, unsigned flags) {
-                              // The importer owns it.
-                              importer.SetIOHandler(new OneFileSystem(name, bytes));
-                              return importer.ReadFile(name, flags);
-                            });
+    return importWithAssimp(
+        path, options, ply ? &*ply : nullptr,
+        [&](Assimp::Importer& importer, unsigned flags) {
+          // The importer owns it.
+          importer.SetIOHandler(new OneFileSystem(name, bytes));
+          return importer.ReadFile(name, flags);
+        },
+        bytes);
   } catch (const std::bad_alloc&) {
     throw Error(
         cat(name, ": mesh too large for this machine: ran out of memory while importing it"));

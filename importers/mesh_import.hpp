@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/mesh/triangle_mesh.hpp"
+#include "importers/file_vertices.hpp"
 #include "importers/import_limits.hpp"
 
 namespace softbake {
@@ -18,6 +19,8 @@ struct MeshImportOptions {
   /// warning, instead of refusing it.
   bool acceptLossy = false;
   ImportLimits limits{};
+  /// Work out ImportedMeshes::fileVertices; an OBJ is read a second time for it.
+  bool numberFileVertices = false;
 };
 
 struct ImportedMeshes {
@@ -28,6 +31,11 @@ struct ImportedMeshes {
   /// Things that may be wrong with the result: assimp's warnings and errors ("x.gltf: assimp:
   /// …"), an accepted loss. One line each, starting with the file.
   std::vector<std::string> warnings;
+  /// With MeshImportOptions::numberFileVertices, where each vertex of the file went, numbered as
+  /// the file numbers them: an OBJ's `v` statements, a PLY's or OFF's vertex list, an STL's facet
+  /// corners (three per facet), a glTF's POSITION accessor elements, one primitive after another
+  /// (the README's `pins` section). Other formats leave it unknown.
+  FileVertices fileVertices;
 };
 
 /// Throws softbake::Error, naming the file, when it is missing, not a format assimp reads,

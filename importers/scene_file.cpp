@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/mesh/weld.hpp"
 #include "core/text.hpp"
 #include "importers/json_reader.hpp"
 #include "importers/mesh_import.hpp"
@@ -172,8 +173,10 @@ class SceneParser {
     }
   }
 
-  // The meshes a `mesh` key names, in their own space. A file may hold several.
-  std::vector<TriangleMesh> readMeshes(const JsonValue& value, bool merge) {
+  // The meshes a `mesh` key names, in their own space. A file may hold several. With `numbering`,
+  // also where the file's vertices went (FileVertices).
+  std::vector<TriangleMesh> readMeshes(const JsonValue& value, bool merge,
+                                       FileVertices* numbering = nullptr) {
     if (value.isString()) {
       const std::filesystem::path given = value.string();
       if (given.empty()) value.fail("expected a non-empty string");
@@ -185,7 +188,9 @@ class SceneParser {
       ImportedMeshes imported;
       scene_.inputFiles.push_back(resolved);
       try {
-        imported = importMeshFile(resolved, importOptions(merge));
+        MeshImportOptions options = importOptions(merge);
+        options.numberFileVertices = numbering != nullptr;
+        imported = importMeshFile(resolved, options);
       } catch (const Error& importError) {
         value.fail(importError.what());
       }
@@ -198,6 +203,7 @@ class SceneParser {
       for (std::string& note : imported.notes) scene_.notes.push_back(std::move(note));
       for (std::string& warning : imported.warnings)
         scene_.warnings.push_back(cat(source_, ": ", value.path(), ": ", warning));
+      if (numbering) *numbering = std::move(imported.fileVertices);
       return std::move(imported.meshes);
     }
     if (value.isObject()) {
@@ -215,6 +221,8 @@ class SceneParser {
       addToScene(value, 10 * grow + 2, 20 * grow);
       TriangleMesh mesh = makeIcosphere(subdivisions, radius);
       mesh.name = "icosphere";
+      if (numbering)
+        for (Index v = 0; v < mesh.positions.size(); ++v) numbering->places.push_back({0, v});
       return {std::move(mesh)};
     }
     value.fail("expected string (a mesh file) or object (a primitive)");
@@ -283,12 +291,16 @@ class SceneParser {
     return material;
   }
 
+  // `indices` are the file's vertex numbers here; pinFileVertices() maps them once it is read.
   static Pins parsePins(const JsonValue& value) {
-    const JsonObject object = value.object({"indices", "boxes"});
+    const JsonObject object = value.object({"indices", "particles", "boxes"});
     Pins pins;
-    if (auto indices = object.find("indices"))
-      for (const JsonValue& index : indices->array())
-        pins.particles.push_back(Index(index.integerIn(0, std::numeric_limits<Index>::max() - 1)));
+    auto readIndices = [](const JsonValue& indices, std::vector<Index>& out) {
+      for (const JsonValue& index : indices.array())
+        out.push_back(Index(index.integerIn(0, std::numeric_limits<Index>::max() - 1)));
+    };
+    if (auto indices = object.find("indices")) readIndices(*indices, pins.vertices);
+    if (auto particles = object.find("particles")) readIndices(*particles, pins.particles);
     if (auto boxes = object.find("boxes")) {
       for (const JsonValue& box : boxes->array()) {
         const JsonObject corners = box.object({"min", "max"});
@@ -327,13 +339,22 @@ class SceneParser {
     if (pinsValue) body.pins = parsePins(*pinsValue);
 
     const JsonValue meshValue = object.at("mesh");
-    std::vector<TriangleMesh> meshes = readMeshes(meshValue, merge);
-    // Particle indices belong to one welded mesh; across split bodies they would be ambiguous.
-    if (meshes.size() > 1 && !body.pins.particles.empty()) {
-      pinsValue->child("indices").fail(
-          cat("particle indices need a single mesh, but the file gives ", meshes.size(),
-              "; set merge_meshes to true or pin with boxes"));
+    FileVertices numbering;
+    std::vector<TriangleMesh> meshes =
+        readMeshes(meshValue, merge, body.pins.vertices.empty() ? nullptr : &numbering);
+    // Indices belong to one mesh; across split bodies they would be ambiguous.
+    if (meshes.size() > 1 && (!body.pins.vertices.empty() || !body.pins.particles.empty())) {
+      const bool vertices = !body.pins.vertices.empty();
+      pinsValue->child(vertices ? "indices" : "particles")
+          .fail(cat(vertices ? "vertex" : "particle",
+                    " indices need a single mesh, but the file gives ", meshes.size(),
+                    "; set merge_meshes to true or pin with boxes"));
     }
+    if (!body.pins.vertices.empty())
+      pinFileVertices(pinsValue->child("indices"), meshValue, numbering, body.pins.vertices);
+    if (!body.pins.particles.empty())
+      checkParticlePins(pinsValue->child("particles"), meshValue, meshes.front(),
+                        body.pins.particles);
     for (TriangleMesh& mesh : meshes) {
       BodySetup split = body;
       if (meshes.size() > 1) split.name = cat(body.name, '/', mesh.name);
@@ -347,6 +368,45 @@ class SceneParser {
       scene_.render.bodyColors.resize(scene_.setup.bodies.size());
       scene_.render.bodyColors.back() = color;
     }
+  }
+
+  // How messages name the mesh a `mesh` key gives: its file as the scene names it.
+  static std::string meshLabel(const JsonValue& mesh) {
+    return mesh.isString() ? mesh.string() : std::string("the icosphere");
+  }
+
+  // `vertices` hold the file's vertex numbers (`pins.indices`, at `indices`); they become the
+  // imported mesh's vertices at the same places.
+  static void pinFileVertices(const JsonValue& indices, const JsonValue& mesh,
+                              const FileVertices& numbering, std::vector<Index>& vertices) {
+    if (!numbering.unknown.empty())
+      indices.fail(
+          cat(meshLabel(mesh), ": ", numbering.unknown, "; pin with pins.particles or pins.boxes"));
+    const std::vector<JsonValue> values = indices.array();
+    for (std::size_t k = 0; k < vertices.size(); ++k) {
+      const Index vertex = vertices[k];
+      if (vertex >= numbering.places.size())
+        values[k].fail(cat("vertex ", vertex, " is beyond the ", numbering.places.size(),
+                           " vertices of ", meshLabel(mesh), " (indices count from 0)"));
+      const FileVertexPlace& place = numbering.places[vertex];
+      if (place.mesh == FileVertexPlace::kNone)
+        values[k].fail(cat("vertex ", vertex, " of ", meshLabel(mesh),
+                           " is on no triangle, so it is no particle"));
+      vertices[k] = place.vertex;
+    }
+  }
+
+  // Particle indices count the welded particles, which the weld here numbers as core's will.
+  static void checkParticlePins(const JsonValue& indices, const JsonValue& mesh,
+                                const TriangleMesh& triangles,
+                                const std::vector<Index>& particles) {
+    const std::size_t count =
+        weldByPosition(triangles.positions, triangles.triangles).positions.size();
+    const std::vector<JsonValue> values = indices.array();
+    for (std::size_t k = 0; k < particles.size(); ++k)
+      if (particles[k] >= count)
+        values[k].fail(cat("particle ", particles[k], " is beyond the ", count, " particles of ",
+                           meshLabel(mesh), " (indices count from 0)"));
   }
 
   void parseCollider(const JsonValue& value, std::size_t index) {

@@ -22,6 +22,9 @@ struct PinBox {
 
 /// Particles held fixed in space for the whole simulation (flags, banners).
 struct Pins {
+  /// Vertices of BodySetup::mesh; each pins the particle it welds into. A scene file's
+  /// `pins.indices` number the mesh file's vertices, which importers map to these.
+  std::vector<Index> vertices;
   std::vector<Index> particles;  ///< welded particle indices (the `v` order of the OBJ export)
   std::vector<PinBox> boxes;
 };

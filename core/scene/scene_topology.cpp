@@ -153,6 +153,17 @@ void pinParticles(SceneTopology& scene, const BodySetup& setup, const Body& body
     if (inverseMass != 0) ++pinned;
     inverseMass = 0;
   };
+  const std::vector<Index>& renderToParticle = body.render.renderToParticle;
+  for (Index vertex : setup.pins.vertices) {
+    if (vertex >= renderToParticle.size())
+      throw Error(cat("body '", setup.name, "': pinned vertex ", vertex, " is beyond its ",
+                      renderToParticle.size(), " vertices"));
+    if (renderToParticle[vertex] == kNoParticle)
+      throw Error(cat("body '", setup.name, "': pinned vertex ", vertex,
+                      " is on no triangle the simulation keeps (unused, or only on degenerate "
+                      "triangles)"));
+    pin(renderToParticle[vertex]);
+  }
   for (Index index : setup.pins.particles) {
     if (index >= body.particleCount)
       throw Error(cat("body '", setup.name, "': pin index ", index, " is beyond its ",
@@ -164,7 +175,7 @@ void pinParticles(SceneTopology& scene, const BodySetup& setup, const Body& body
       const Vec3f p = positions[i];
       if ((p.array() >= box.min.array()).all() && (p.array() <= box.max.array()).all()) pin(i);
     }
-  if (!setup.pins.boxes.empty() || !setup.pins.particles.empty())
+  if (!setup.pins.boxes.empty() || !setup.pins.particles.empty() || !setup.pins.vertices.empty())
     note(cat(pinned, " particles pinned"));
 }
 

@@ -100,5 +100,31 @@ TEST(Pins, IndexBeyondTheBodyIsAnErrorNamingIt) {
   }
 }
 
+TEST(Pins, AVertexPinsTheParticleItWeldsInto) {
+  // Two triangles sharing an edge whose corners are listed twice (a UV seam): render vertices
+  // 3 and 4 weld into the particles of 0 and 2.
+  SceneSetup scene;
+  BodySetup& body = scene.bodies.emplace_back();
+  body.name = "sheet";
+  body.mesh.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(1, 0, 1),
+                         Vec3f(0, 0, 0), Vec3f(1, 0, 1), Vec3f(0, 0, 1)};
+  body.mesh.triangles = {{0, 2, 1}, {3, 5, 4}};
+  body.pins.vertices = {4};
+  const SceneTopology topology = buildSceneTopology(scene);
+  ASSERT_EQ(topology.particleCount(), 4u);
+  std::vector<Vec3> pinned;
+  for (std::size_t i = 0; i < topology.particleCount(); ++i)
+    if (topology.inverseMass[i] == 0) pinned.push_back(topology.restPosition[i]);
+  EXPECT_EQ(pinned, (std::vector<Vec3>{Vec3(1, 0, 1)}));
+
+  body.pins.vertices = {6};
+  try {
+    buildSceneTopology(scene);
+    FAIL() << "expected an error";
+  } catch (const std::exception& e) {
+    EXPECT_EQ(std::string(e.what()), "body 'sheet': pinned vertex 6 is beyond its 6 vertices");
+  }
+}
+
 }  // namespace
 }  // namespace softbake

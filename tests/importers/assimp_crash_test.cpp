@@ -83,6 +83,7 @@ TEST_F(SnapshotBytes, ComeBackAsTheSnapshotThatWasSent) {
   AssimpSnapshot sent;
   sent.loaderVertices = 7;
   sent.loaderFaces = 5;
+  sent.loaderMeshVertices = {4, 3};
   sent.unusedVertices = 1;
   sent.emptyFaces = 2;
   SnapshotMesh mesh;
@@ -106,6 +107,7 @@ TEST_F(SnapshotBytes, ComeBackAsTheSnapshotThatWasSent) {
   const AssimpSnapshot got = readAssimpSnapshot(fd());
   EXPECT_EQ(got.loaderVertices, 7u);
   EXPECT_EQ(got.loaderFaces, 5u);
+  EXPECT_EQ(got.loaderMeshVertices, sent.loaderMeshVertices);
   EXPECT_EQ(got.unusedVertices, 1u);
   EXPECT_EQ(got.emptyFaces, 2u);
   ASSERT_EQ(got.meshes.size(), 1u);

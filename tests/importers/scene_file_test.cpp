@@ -106,7 +106,8 @@ TEST(SceneFile, ReadsEveryKey) {
   EXPECT_NE(jelly.stiffness, 123);
   EXPECT_EQ(body.mass, Scalar(2.5));
   EXPECT_EQ(body.velocity, Vec3(1, 0, -1));
-  EXPECT_EQ(body.pins.particles, (std::vector<Index>{0, 7}));
+  // The icosphere's vertices are its particles' render vertices, in its own order.
+  EXPECT_EQ(body.pins.vertices, (std::vector<Index>{0, 7}));
   ASSERT_EQ(body.pins.boxes.size(), 1u);
   EXPECT_EQ(body.pins.boxes[0].max, Vec3f(1, 1, 1));
 
@@ -173,6 +174,13 @@ TEST(SceneFile, ErrorsNameTheKeyPath) {
        "scene.json: bodies[1].pins.indices[0]: expected an integer in [0, 4294967294]"},
       {two + R"("pins": {"indices": [1.5]}}]})",
        "scene.json: bodies[1].pins.indices[0]: expected integer"},
+      {two + R"("pins": {"indices": [0, 42]}}]})",
+       "scene.json: bodies[1].pins.indices[1]: vertex 42 is beyond the 42 vertices of the "
+       "icosphere "
+       "(indices count from 0)"},
+      {two + R"("pins": {"particles": [42]}}]})",
+       "scene.json: bodies[1].pins.particles[0]: particle 42 is beyond the 42 particles of the "
+       "icosphere (indices count from 0)"},
       {two + R"("pins": {"boxes": [{"min": [0, 2, 0], "max": [1, 1, 1]}]}}]})",
        "scene.json: bodies[1].pins.boxes[0]: expected min <= max on every axis"},
       {two + R"("pins": {"boxes": [{"min": [0, 0, 0]}]}}]})",
@@ -337,7 +345,7 @@ TEST(SceneFile, MultiMeshFilesGiveOneBodyPerMeshUnlessMerged) {
 
   EXPECT_EQ(sceneError(R"({"bodies": [{"mesh": ")" + fbx + R"(", "pins": {"indices": [0]}}]})",
                        test::testMeshes()),
-            "scene.json: bodies[0].pins.indices: particle indices need a single mesh, but the file "
+            "scene.json: bodies[0].pins.indices: vertex indices need a single mesh, but the file "
             "gives 4; set merge_meshes to true or pin with boxes");
 }
 
