@@ -77,6 +77,42 @@ std::vector<Vec3f> meshNormals(const TriangleMesh& mesh) {
 
 // ---- scene ---------------------------------------------------------------------------------
 
+std::string_view contactsViewName(ContactsView view) {
+  switch (view) {
+    case ContactsView::XRay:
+      return "xray";
+    case ContactsView::Opaque:
+      return "opaque";
+    case ContactsView::Automatic:
+      break;
+  }
+  return "automatic";
+}
+
+ContactsView contactsViewFor(const RenderOptions& options, const SceneTopology& topology) {
+  if (options.contactsView != ContactsView::Automatic) return options.contactsView;
+  if (!options.contacts) return ContactsView::Opaque;
+  const bool selfCollision = std::any_of(topology.bodies.begin(), topology.bodies.end(),
+                                         [](const Body& body) { return body.selfCollision; });
+  return topology.bodies.size() + topology.staticMeshes.size() > 1 || selfCollision
+             ? ContactsView::XRay
+             : ContactsView::Opaque;
+}
+
+Vec3f contactKindColor(ContactKind kind) {
+  switch (kind) {
+    case ContactKind::EdgeTriangle:
+      return kContactColor;
+    case ContactKind::ParticleTriangle:
+      return {1.0f, 0.42f, 0.0f};
+    case ContactKind::Corner:
+      return {0.85f, 0.0f, 0.75f};
+    case ContactKind::Plane:
+      return {0.0f, 0.25f, 1.0f};
+  }
+  return kContactColor;
+}
+
 Vec3f bodyColor(const RenderOptions& options, std::size_t index) {
   if (index < options.bodyColors.size() && options.bodyColors[index].x() >= 0)
     return options.bodyColors[index];
@@ -150,6 +186,7 @@ RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
   scene.boundsMax = bounds.max();
   scene.size = std::max(bounds.diagonal().norm(), 1e-3f);
   scene.contactRadius = options.contactRadius > 0 ? options.contactRadius : 0.015f * scene.size;
+  scene.xray = contactsViewFor(options, topology) == ContactsView::XRay;
 
   const Vec3f up = topology.planes.empty()
                        ? Vec3f::UnitY()
@@ -164,20 +201,27 @@ RenderScene makeRenderScene(std::shared_ptr<const SceneTopology> shared,
 
 struct FrameRenderer::Gl {
   GLuint surfaceProgram = 0, groundProgram = 0, shadowProgram = 0;
-  GLuint emptyVao = 0;  ///< core profile draws need a vertex array; the shadow has no attributes
+  GLuint translucentProgram = 0, compositeProgram = 0;  ///< the contact view's
+  /// Core profile draws need a vertex array; the shadow and the composite have no attributes.
+  GLuint emptyVao = 0;
   std::vector<MeshBuffers> bodies;
   MeshBuffers statics, sphere, ground;
-  GLuint contactOffsets = 0;
-  GLsizeiptr contactCapacity = 0;  ///< contacts the offset buffer holds
+  GLuint contactInstances = 0;     ///< per contact: offset, then tint (6 floats)
+  GLsizeiptr contactCapacity = 0;  ///< contacts the instance buffer holds
   GLuint multisampleFbo = 0, multisampleColor = 0, multisampleDepth = 0;
   GLuint resolveFbo = 0, resolveColor = 0, resolveDepth = 0;
   /// The background and the ground without shadows, colour and depth, as every frame starts.
   GLuint groundFbo = 0, groundColor = 0, groundDepth = 0;
+  /// The contact view's accumulation and weight targets: multisampled renderbuffers sharing the
+  /// opaque pass's depth (so bodies behind a contact or the ground are hidden), resolved into
+  /// textures the composite reads. Without multisampling the textures are drawn into directly.
+  GLuint oitFbo = 0, oitAccumulation = 0, oitWeight = 0;
+  GLuint oitResolveFbo = 0, oitAccumulationTexture = 0, oitWeightTexture = 0;
   int samples = 0;
   // Per-frame scratch, kept to avoid allocating every frame.
   std::vector<Vec3f> normals;
   std::vector<float> interleaved;
-  std::vector<float> offsets;
+  std::vector<float> instances;
   std::vector<std::uint8_t> pixels;
 };
 
@@ -187,12 +231,13 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
       context_(std::make_unique<EglContext>(options_.egl)),
       gl_(std::make_unique<Gl>()) {
   Gl& gl = *gl_;
-  gl.surfaceProgram = linkProgram(kSurfaceVertexShader, kSurfaceFragmentShader);
+  gl.surfaceProgram = linkProgram(kSurfaceVertexShader, kSurfaceFragmentShader.c_str());
   gl.groundProgram = linkProgram(kGroundVertexShader, kGroundFragmentShader);
   gl.shadowProgram = linkProgram(kShadowVertexShader, kShadowFragmentShader);
   glGenVertexArrays(1, &gl.emptyVao);
   createMeshes();
   createFramebuffers();
+  if (scene_.xray) createContactView();
   // The camera and the planes are fixed for the sequence: the ground is drawn once, and each frame
   // starts from a copy of it (the ground shader, with its per-pixel loop over the shadows, cost
   // llvmpipe 40% of every frame).
@@ -237,7 +282,8 @@ void FrameRenderer::createMeshes() {
   }
   gl.statics.create(interleaved, indices, GL_STATIC_DRAW);
 
-  // Contacts: a unit icosphere drawn once per contact, offsets per instance in attribute 2.
+  // Contacts: a unit icosphere drawn once per contact, per instance its offset in attribute 2
+  // and its tint in attribute 3.
   const TriangleMesh sphere = makeIcosphere(1, 1.0f);
   interleaved.clear();
   indices.clear();
@@ -245,12 +291,16 @@ void FrameRenderer::createMeshes() {
     interleaved.insert(interleaved.end(), {p.x(), p.y(), p.z(), p.x(), p.y(), p.z()});
   for (const Triangle& t : sphere.triangles) indices.insert(indices.end(), t.begin(), t.end());
   gl.sphere.create(interleaved, indices, GL_STATIC_DRAW);
-  glGenBuffers(1, &gl.contactOffsets);
+  glGenBuffers(1, &gl.contactInstances);
   glBindVertexArray(gl.sphere.vao);
-  glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
+  glBindBuffer(GL_ARRAY_BUFFER, gl.contactInstances);
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
   glVertexAttribDivisor(2, 1);
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<const void*>(3 * sizeof(float)));
+  glVertexAttribDivisor(3, 1);
   glBindVertexArray(0);
 
   // The ground: one large quad on the first plane, centred under the scene.
@@ -299,6 +349,59 @@ void FrameRenderer::createFramebuffers() {
   makeFramebuffer(gl.groundFbo, gl.groundColor, gl.groundDepth, gl.samples > 1 ? gl.samples : 0);
 }
 
+/// The contact view's programs and its two transparency targets (see Gl::oitFbo).
+void FrameRenderer::createContactView() {
+  Gl& gl = *gl_;
+  gl.translucentProgram = linkProgram(kSurfaceVertexShader, kTranslucentFragmentShader.c_str());
+  gl.compositeProgram = linkProgram(kFullScreenVertexShader, kCompositeFragmentShader);
+  const int w = options_.width, h = options_.height;
+  const auto texture = [&](GLuint& name, GLenum format, GLenum channels) {
+    glGenTextures(1, &name);
+    glBindTexture(GL_TEXTURE_2D, name);
+    glTexImage2D(GL_TEXTURE_2D, 0, GLint(format), w, h, 0, channels, GL_HALF_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  };
+  texture(gl.oitAccumulationTexture, GL_RGBA16F, GL_RGBA);
+  texture(gl.oitWeightTexture, GL_R16F, GL_RED);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glGenFramebuffers(1, &gl.oitResolveFbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.oitResolveFbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                         gl.oitAccumulationTexture, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, gl.oitWeightTexture,
+                         0);
+  if (gl.samples > 1) {
+    glGenRenderbuffers(1, &gl.oitAccumulation);
+    glGenRenderbuffers(1, &gl.oitWeight);
+    glBindRenderbuffer(GL_RENDERBUFFER, gl.oitAccumulation);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, gl.samples, GL_RGBA16F, w, h);
+    glBindRenderbuffer(GL_RENDERBUFFER, gl.oitWeight);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, gl.samples, GL_R16F, w, h);
+    glGenFramebuffers(1, &gl.oitFbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, gl.oitFbo);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                              gl.oitAccumulation);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER, gl.oitWeight);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                              gl.multisampleDepth);
+  } else {
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                              gl.resolveDepth);
+    gl.oitFbo = gl.oitResolveFbo;
+  }
+  const GLenum targets[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  for (GLuint fbo : {gl.oitFbo, gl.oitResolveFbo}) {
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glDrawBuffers(2, targets);
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+      throw Error(cat("renderer: the OpenGL driver refused the contact view's ", w, "x", h,
+                      " half-float framebuffer with ", gl.samples, " samples (status 0x", std::hex,
+                      status, "); render with --contacts-view opaque"));
+  }
+}
+
 FrameRenderer::~FrameRenderer() {
   // The GL objects go with the context; delete them explicitly only where it is current.
   if (!gl_ || !context_) return;
@@ -312,16 +415,21 @@ FrameRenderer::~FrameRenderer() {
   gl.statics.destroy();
   gl.sphere.destroy();
   gl.ground.destroy();
-  glDeleteBuffers(1, &gl.contactOffsets);
+  glDeleteBuffers(1, &gl.contactInstances);
   glDeleteVertexArrays(1, &gl.emptyVao);
-  const GLuint framebuffers[] = {gl.multisampleFbo, gl.resolveFbo, gl.groundFbo};
-  glDeleteFramebuffers(3, framebuffers);
+  // Names 0 and repeats are ignored by the glDelete* calls.
+  const GLuint framebuffers[] = {gl.multisampleFbo, gl.resolveFbo, gl.groundFbo, gl.oitFbo,
+                                 gl.oitResolveFbo};
+  glDeleteFramebuffers(gl.oitFbo == gl.oitResolveFbo ? 4 : 5, framebuffers);
   const GLuint renderbuffers[] = {gl.multisampleColor, gl.multisampleDepth, gl.resolveColor,
-                                  gl.resolveDepth,     gl.groundColor,      gl.groundDepth};
-  glDeleteRenderbuffers(6, renderbuffers);
-  glDeleteProgram(gl.surfaceProgram);
-  glDeleteProgram(gl.groundProgram);
-  glDeleteProgram(gl.shadowProgram);
+                                  gl.resolveDepth,     gl.groundColor,      gl.groundDepth,
+                                  gl.oitAccumulation,  gl.oitWeight};
+  glDeleteRenderbuffers(8, renderbuffers);
+  const GLuint textures[] = {gl.oitAccumulationTexture, gl.oitWeightTexture};
+  glDeleteTextures(2, textures);
+  for (GLuint program : {gl.surfaceProgram, gl.groundProgram, gl.shadowProgram,
+                         gl.translucentProgram, gl.compositeProgram})
+    glDeleteProgram(program);
 }
 
 std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
@@ -346,8 +454,11 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   const std::vector<float> shadows = uploadBodies(frame);
   drawShadows(light, shadows);
   glEnable(GL_DEPTH_TEST);
-  drawSurfaces(light);
-  drawContacts(frame);
+  useSurfaceProgram(gl.surfaceProgram, light);
+  if (!scene_.xray) drawBodies();
+  drawStatics();
+  drawContacts(frame, light);
+  if (scene_.xray) drawTranslucentBodies(light);
   glBindVertexArray(0);
   return readImage(frame.number);
 }
@@ -400,21 +511,27 @@ std::vector<float> FrameRenderer::uploadBodies(const Frame& frame) {
   return shadows;
 }
 
-/// Bodies in their colours and static meshes in grey; with the wireframe, the edges over them.
-void FrameRenderer::drawSurfaces(const Lighting& lighting) {
+/// Binds `program` (the opaque or the translucent surface shader) with the frame's view and
+/// lights.
+void FrameRenderer::useSurfaceProgram(unsigned program, const Lighting& lighting) {
+  const Camera& camera = scene_.camera;
+  glUseProgram(program);
+  uniform(program, "uViewProjection", lighting.viewProjection);
+  uniform(program, "uEye", camera.position);
+  uniform(program, "uKey", lighting.key);
+  uniform(program, "uFill", lighting.fill);
+  uniform(program, "uUp", camera.up);
+  uniform(program, "uScale", 1.0f);
+  uniform(program, "uFlat", 0);
+  glVertexAttrib3f(2, 0, 0, 0);  // meshes have no per-instance offset
+  glVertexAttrib3f(3, 1, 1, 1);  // nor a tint
+}
+
+/// Bodies in their colours, opaque; with the wireframe, the edges over them. Expects the surface
+/// program in use (useSurfaceProgram()).
+void FrameRenderer::drawBodies() {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
-  const Camera& camera = scene_.camera;
-  glUseProgram(gl.surfaceProgram);
-  uniform(gl.surfaceProgram, "uViewProjection", lighting.viewProjection);
-  uniform(gl.surfaceProgram, "uEye", camera.position);
-  uniform(gl.surfaceProgram, "uKey", lighting.key);
-  uniform(gl.surfaceProgram, "uFill", lighting.fill);
-  uniform(gl.surfaceProgram, "uUp", camera.up);
-  uniform(gl.surfaceProgram, "uScale", 1.0f);
-  uniform(gl.surfaceProgram, "uFlat", 0);
-  glVertexAttrib3f(2, 0, 0, 0);  // meshes have no per-instance offset
-
   if (options_.wireframe) {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
@@ -424,12 +541,6 @@ void FrameRenderer::drawSurfaces(const Lighting& lighting) {
     uniform(gl.surfaceProgram, "uColor", bodyColor(options_, b));
     glBindVertexArray(gl.bodies[b].vao);
     glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
-  }
-  uniform(gl.surfaceProgram, "uSpecular", 0.08f);
-  uniform(gl.surfaceProgram, "uColor", Vec3f(Vec3f::Constant(0.45f)));
-  if (gl.statics.indexCount > 0) {
-    glBindVertexArray(gl.statics.vao);
-    glDrawElements(GL_TRIANGLES, gl.statics.indexCount, GL_UNSIGNED_INT, nullptr);
   }
   if (options_.wireframe) {
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -445,29 +556,126 @@ void FrameRenderer::drawSurfaces(const Lighting& lighting) {
   }
 }
 
-/// The contacts as instanced spheres.
-void FrameRenderer::drawContacts(const Frame& frame) {
+/// Static meshes in grey, opaque in either view: contacts on them show through the bodies.
+/// Expects the surface program in use (useSurfaceProgram()).
+void FrameRenderer::drawStatics() {
+  Gl& gl = *gl_;
+  if (gl.statics.indexCount == 0) return;
+  uniform(gl.surfaceProgram, "uSpecular", 0.08f);
+  uniform(gl.surfaceProgram, "uColor", Vec3f(Vec3f::Constant(0.45f)));
+  glBindVertexArray(gl.statics.vao);
+  glDrawElements(GL_TRIANGLES, gl.statics.indexCount, GL_UNSIGNED_INT, nullptr);
+}
+
+/// The contact view's bodies: every layer of every body accumulated into the transparency
+/// targets, tested against the opaque pass's depth but not writing it, so the order they are
+/// drawn in does not matter; the wireframe's edges go in as more opaque layers.
+void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
+  Gl& gl = *gl_;
+  const SceneTopology& topology = *scene_.topology;
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.oitFbo);
+  const GLfloat clearAccumulation[] = {0, 0, 0, 1}, clearWeight[] = {0, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, clearAccumulation);
+  glClearBufferfv(GL_COLOR, 1, clearWeight);
+  glDepthMask(GL_FALSE);
+  glEnable(GL_BLEND);
+  glBlendFuncSeparate(GL_ONE, GL_ONE, GL_ZERO, GL_ONE_MINUS_SRC_ALPHA);
+  useSurfaceProgram(gl.translucentProgram, lighting);
+  uniform(gl.translucentProgram, "uDepthScale", scene_.size);
+  uniform(gl.translucentProgram, "uSpecular", 0.25f);
+  uniform(gl.translucentProgram, "uAlpha", 0.3f);
+  // A closed body shows its front layer only: its back layer would add little to the picture
+  // and as much again to llvmpipe's blending. Open meshes show both sides.
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+    if (topology.bodies[b].closed)
+      glEnable(GL_CULL_FACE);
+    else
+      glDisable(GL_CULL_FACE);
+    uniform(gl.translucentProgram, "uColor", bodyColor(options_, b));
+    glBindVertexArray(gl.bodies[b].vao);
+    glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
+  }
+  glDisable(GL_CULL_FACE);
+  if (options_.wireframe) {
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    uniform(gl.translucentProgram, "uFlat", 1);
+    uniform(gl.translucentProgram, "uAlpha", 0.6f);
+    for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+      uniform(gl.translucentProgram, "uColor", Vec3f(bodyColor(options_, b) * 0.3f));
+      glBindVertexArray(gl.bodies[b].vao);
+      glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
+    }
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+  glDisable(GL_BLEND);
+  glDepthMask(GL_TRUE);
+}
+
+/// The contacts as instanced spheres, opaque, in the contact colour or their kind's.
+void FrameRenderer::drawContacts(const Frame& frame, const Lighting& lighting) {
   Gl& gl = *gl_;
   if (!options_.contacts || frame.contacts.empty()) return;
-  gl.offsets.clear();
+  gl.instances.clear();
   for (const Contact& c : frame.contacts) {
     const Vec3f p = c.position.cast<float>();
-    gl.offsets.insert(gl.offsets.end(), {p.x(), p.y(), p.z()});
+    const Vec3f tint =
+        options_.contactColorsByKind ? contactKindColor(c.kind) : Vec3f(Vec3f::Ones());
+    gl.instances.insert(gl.instances.end(), {p.x(), p.y(), p.z(), tint.x(), tint.y(), tint.z()});
   }
   const auto count = GLsizeiptr(frame.contacts.size());
-  glBindBuffer(GL_ARRAY_BUFFER, gl.contactOffsets);
+  glBindBuffer(GL_ARRAY_BUFFER, gl.contactInstances);
   if (count > gl.contactCapacity) {
     gl.contactCapacity = std::max(count, 2 * gl.contactCapacity);
-    glBufferData(GL_ARRAY_BUFFER, gl.contactCapacity * 3 * GLsizeiptr(sizeof(float)), nullptr,
+    glBufferData(GL_ARRAY_BUFFER, gl.contactCapacity * 6 * GLsizeiptr(sizeof(float)), nullptr,
                  GL_STREAM_DRAW);
   }
-  glBufferSubData(GL_ARRAY_BUFFER, 0, count * 3 * GLsizeiptr(sizeof(float)), gl.offsets.data());
+  glBufferSubData(GL_ARRAY_BUFFER, 0, count * 6 * GLsizeiptr(sizeof(float)), gl.instances.data());
+  useSurfaceProgram(gl.surfaceProgram, lighting);
   uniform(gl.surfaceProgram, "uScale", scene_.contactRadius);
-  uniform(gl.surfaceProgram, "uColor", options_.contactColor);
-  uniform(gl.surfaceProgram, "uSpecular", 0.15f);
+  uniform(gl.surfaceProgram, "uColor",
+          options_.contactColorsByKind ? Vec3f(Vec3f::Ones()) : options_.contactColor);
+  uniform(gl.surfaceProgram, "uSpecular", 0.45f);
   glBindVertexArray(gl.sphere.vao);
   glDrawElementsInstanced(GL_TRIANGLES, gl.sphere.indexCount, GL_UNSIGNED_INT, nullptr,
                           GLsizei(count));
+}
+
+/// The contact view's translucent layers over the resolved opaque image (in resolveFbo).
+void FrameRenderer::compositeTranslucent() {
+  Gl& gl = *gl_;
+  const int w = options_.width, h = options_.height;
+  if (gl.oitFbo != gl.oitResolveFbo) {
+    // Each target resolved on its own: a blit copies the read buffer into every draw buffer.
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.oitFbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.oitResolveFbo);
+    for (GLenum target : {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}) {
+      glReadBuffer(target);
+      glDrawBuffer(target);
+      glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    }
+    const GLenum targets[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(2, targets);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.resolveFbo);
+  glViewport(0, 0, w, h);
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glUseProgram(gl.compositeProgram);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, gl.oitAccumulationTexture);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, gl.oitWeightTexture);
+  uniform(gl.compositeProgram, "uAccumulation", 0);
+  uniform(gl.compositeProgram, "uWeight", 1);
+  glBindVertexArray(gl.emptyVao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glDisable(GL_BLEND);
 }
 
 /// The ground quad: grid and fade towards the horizon.
@@ -545,6 +753,7 @@ std::vector<std::uint8_t> FrameRenderer::readImage(int frameNumber) {
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.resolveFbo);
     glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
+  if (scene_.xray) compositeTranslucent();
   glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.resolveFbo);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   gl.pixels.resize(std::size_t(w) * std::size_t(h) * 3);

@@ -1,8 +1,10 @@
 #pragma once
 /// Renders simulated frames off-screen to PNG: soft bodies shaded in per-body colours, static
-/// colliders in grey, the ground plane with a grid and soft blob shadows, contacts as small grey
-/// spheres (the paper's figure 4). OpenGL 3.3 core through EGL, so it runs without a display on
-/// Mesa's llvmpipe or on a GPU.
+/// colliders in grey, the ground plane with a grid and soft blob shadows, contacts as small
+/// spheres (the paper's grey spheres of figures 4-6, here in a colour that stands out). In the
+/// contact view (x-ray) the bodies are translucent, so the contacts where they press into each
+/// other show through them. OpenGL 3.3 core through EGL, so it runs without a display on Mesa's
+/// llvmpipe or on a GPU.
 ///
 /// Deterministic: the image depends only on the world, the options and the frame (no clock, no
 /// frame counter), so the same input gives byte-identical PNGs on the same machine and driver.
@@ -12,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,17 +26,34 @@
 
 namespace softbake {
 
+/// How the bodies are drawn around the contact spheres.
+enum class ContactsView : std::uint8_t {
+  Automatic,  ///< XRay when contact spheres are drawn and the scene has contacts between
+              ///< surfaces (see contactsViewFor()), else Opaque
+  XRay,       ///< bodies translucent (order-independent transparency), contacts opaque
+  Opaque,     ///< bodies opaque: contacts between them are mostly hidden inside
+};
+
+/// "xray", "opaque" (and "automatic"): the names of the scene key and the command-line option.
+std::string_view contactsViewName(ContactsView view);
+
+/// The default contact colour, linear RGB: a saturated red, which no body of the soft palette
+/// (saturation 0.55) and not the grey ground (0.5) comes near.
+inline const Vec3f kContactColor(1.0f, 0.06f, 0.03f);
+
 struct RenderOptions {
   int width = 1280, height = 720;  ///< pixels
   int samples = 4;                 ///< multisampling; 1 or less renders without it
   /// Camera; when position or target is unset, framed automatically (see frameCamera()).
   std::optional<Vec3f> cameraPosition;
   std::optional<Vec3f> cameraTarget;
-  float fovDegrees = 40;                        ///< vertical field of view
-  bool contacts = true;                         ///< draw the frame's contacts as spheres
-  Vec3f contactColor = Vec3f::Constant(0.55f);  ///< linear RGB, 0..1
-  float contactRadius = 0;                      ///< m; 0: 1.5% of the scene's size
-  bool wireframe = false;                       ///< draw the bodies' edges over their surfaces
+  float fovDegrees = 40;               ///< vertical field of view
+  bool contacts = true;                ///< draw the frame's contacts as spheres
+  Vec3f contactColor = kContactColor;  ///< linear RGB, 0..1
+  bool contactColorsByKind = false;    ///< colour each contact by its kind (contactKindColor())
+  float contactRadius = 0;             ///< m; 0: 1.5% of the scene's size
+  ContactsView contactsView = ContactsView::Automatic;
+  bool wireframe = false;  ///< draw the bodies' edges over their surfaces
   /// Per body, linear RGB 0..1; bodies without an entry (or with a negative red) take the palette.
   std::vector<Vec3f> bodyColors;
   /// Where the bodies go over the whole shot (every frame's particles), when known: automatic
@@ -52,7 +72,18 @@ struct RenderScene {
   Vec3f boundsMin = Vec3f::Zero(), boundsMax = Vec3f::Zero();  ///< the framed region
   float size = 1;                                              ///< diagonal of the framed region, m
   float contactRadius = 0;                                     ///< m
+  bool xray = false;  ///< the contact view: bodies translucent (options' view, resolved)
 };
+
+/// The view `options` asks for, with Automatic resolved for `topology`: XRay when contact spheres
+/// are drawn and contacts between surfaces can happen (more than one collision surface, or a body
+/// that collides with itself), since those contacts lie where surfaces press into each other,
+/// inside the bodies; contacts with the ground alone show without it.
+ContactsView contactsViewFor(const RenderOptions& options, const SceneTopology& topology);
+
+/// The colour of contacts of `kind` when RenderOptions::contactColorsByKind, linear RGB: red for
+/// edge-triangle, orange for particle-triangle, magenta for corner, blue for plane contacts.
+Vec3f contactKindColor(ContactKind kind);
 
 /// Keeps `topology` and fixes the camera for the whole sequence, since a camera fitted per frame
 /// would jump. Automatic framing covers the bodies over the shot (options.shotBounds) or, when
@@ -100,8 +131,13 @@ class FrameRenderer {
   void createMeshes();
   void createFramebuffers();
   std::vector<float> uploadBodies(const Frame& frame);
-  void drawSurfaces(const Lighting& lighting);
-  void drawContacts(const Frame& frame);
+  void createContactView();
+  void useSurfaceProgram(unsigned program, const Lighting& lighting);
+  void drawBodies();
+  void drawStatics();
+  void drawTranslucentBodies(const Lighting& lighting);
+  void drawContacts(const Frame& frame, const Lighting& lighting);
+  void compositeTranslucent();
   void drawGround(const Lighting& lighting);
   void drawShadows(const Lighting& lighting, const std::vector<float>& shadows);
   Lighting lighting() const;

@@ -1,11 +1,9 @@
 // The off-screen renderer on Mesa's llvmpipe (no GPU, no display): image size, a body where the
 // camera says it is, contact spheres exactly where contacts are, byte-identical repeats, the PNG
-// sequence through FramePipeline, and the error when EGL cannot give a context.
+// sequence through FramePipeline, and the error when EGL cannot give a context. The contact view
+// has its own file (contact_view_test.cpp).
 #include <gtest/gtest.h>
 #include <stdlib.h>
-
-#define STB_IMAGE_IMPLEMENTATION
-#include <stb/stb_image.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -24,11 +22,15 @@
 #include "render/egl_context.hpp"
 #include "render/frame_renderer.hpp"
 #include "render/png_sequence_renderer.hpp"
+#include "tests/render/render_support.hpp"
 #include "tests/support/scratch_directory.hpp"
 
 namespace softbake {
 namespace {
 
+using test::decodePng;
+using test::Image;
+using test::makeRenderer;
 using test::readFile;
 using test::ScratchDirectory;
 
@@ -59,60 +61,11 @@ RenderOptions smallOptions() {
   return options;
 }
 
-struct Image {
-  int width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;
-  const std::uint8_t* at(int x, int y) const {
-    return &rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3];
-  }
-};
-
-Image decodePng(const std::string& png) {
-  Image image;
-  int channels = 0;
-  stbi_uc* data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(png.data()),
-                                        int(png.size()), &image.width, &image.height, &channels, 3);
-  if (!data) throw std::runtime_error("stb_image could not decode the PNG");
-  image.rgb.assign(data, data + std::size_t(image.width) * std::size_t(image.height) * 3);
-  stbi_image_free(data);
-  return image;
-}
-
 /// A pixel with all three channels within `tolerance` of each other: grey, not a body's colour.
 bool isGrey(const std::uint8_t* p, int tolerance = 6) {
   const int low = std::min({p[0], p[1], p[2]}), high = std::max({p[0], p[1], p[2]});
   return high - low <= tolerance;
 }
-
-/// Set in CI (.ci/run), which has Mesa's llvmpipe: there, no EGL display fails the test too, so
-/// a CI whose renderer tests all skip cannot pass.
-bool eglDisplayRequired() {
-  const char* value = std::getenv("SOFTBAKE_REQUIRE_EGL");
-  return value != nullptr && std::string_view(value) == "1";
-}
-
-/// A renderer, or null with the reason when this machine has no EGL display at all: nothing can
-/// render here, and the tests skip (unless eglDisplayRequired()). Every other failure (a display
-/// without OpenGL 3.3, a shader the driver rejects, a framebuffer it refuses) is thrown and fails
-/// the test.
-std::unique_ptr<FrameRenderer> makeRenderer(const std::shared_ptr<const SceneTopology>& world,
-                                            const RenderOptions& options, std::string& whyNot) {
-  try {
-    return std::make_unique<FrameRenderer>(makeRenderScene(world, options), options);
-  } catch (const EglDisplayUnavailable& error) {
-    if (eglDisplayRequired()) throw;
-    whyNot = error.what();
-    return nullptr;
-  }
-}
-
-#define MAKE_RENDERER_OR_SKIP(name, world, options)  \
-  std::string whyNot_;                               \
-  auto name = makeRenderer(world, options, whyNot_); \
-  if (!name) {                                       \
-    GTEST_SKIP() << "no EGL display: " << whyNot_;   \
-  }                                                  \
-  static_assert(true)
 
 TEST(Camera, AutomaticFramingKeepsTheWholeSceneInTheImage) {
   const auto world = makeBallTopology();
@@ -191,7 +144,7 @@ TEST(FrameRenderer, RenderingTwiceGivesByteIdenticalPngs) {
   EXPECT_EQ(a, readFile(out.path() / "c.png"));
 }
 
-TEST(FrameRenderer, ContactsShowAsGreySpheresWhereTheyAre) {
+TEST(FrameRenderer, ContactsShowInTheContactColourWhereTheyAre) {
   const auto world = makeBallTopology();
   RenderOptions options = smallOptions();
   options.contactRadius = 0.06f;
@@ -212,7 +165,7 @@ TEST(FrameRenderer, ContactsShowAsGreySpheresWhereTheyAre) {
   const Image with = decodePng(renderer->renderPng(frame));
 
   const std::uint8_t* p = with.at(x, y);
-  EXPECT_TRUE(isGrey(p)) << int(p[0]) << " " << int(p[1]) << " " << int(p[2]);
+  EXPECT_TRUE(test::showsContactColor(p)) << int(p[0]) << " " << int(p[1]) << " " << int(p[2]);
   EXPECT_FALSE(isGrey(without.at(x, y), 20));
   // Only pixels near the contact change.
   for (int j = 0; j < kHeight; ++j)
