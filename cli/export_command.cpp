@@ -84,6 +84,7 @@ int exportFrames(const ExportOptions& options) {
   run.cache = false;  // read, not written
   const std::shared_ptr<const SceneTopology> topology =
       std::make_shared<const SceneTopology>(buildSceneTopology(scene.setup));
+  if (options.contactsView) run.contactsView = options.contactsView;  // after the record's check
   const RenderOptions render = renderOptions(run, scene.render);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(run, *topology);

@@ -5,6 +5,7 @@
 /// for at run time come later this way, and a farm splits a shot's exports into frame ranges.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace softbake {
@@ -14,7 +15,9 @@ struct ExportOptions {
   std::string frames;         ///< "A:B", "A" or empty for every frame of the cache
   bool obj = false, vdb = false, png = false, contacts = false, pc2 = false, mdd = false;
   bool all = false;  ///< every output the run's scene and options ask for
-  int threads = 0;   ///< 0: all cores
+  /// Renders the PNG frames in this contact view ("xray", "opaque") instead of the run's.
+  std::optional<std::string> contactsView;
+  int threads = 0;  ///< 0: all cores
   bool quiet = false;
 };
 

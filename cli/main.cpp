@@ -167,7 +167,13 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
   runApp->add_flag("--no-render", line.renderOff, "write no PNG frames")->excludes(renderFlag);
   runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
   runApp->add_flag("--no-contact-spheres", run.noContactSpheres,
-                   "render without the grey spheres at the contact points");
+                   "render without the spheres at the contact points");
+  runApp
+      ->add_option("--contacts-view", run.contactsView,
+                   "xray: bodies translucent, so the contacts inside show (the default when "
+                   "contact spheres are drawn and bodies can touch each other or themselves); "
+                   "opaque: bodies solid")
+      ->check(CLI::IsMember({"xray", "opaque"}));
   runApp->add_flag("--render-while-simulating", run.renderWhileSimulating,
                    "render each frame as it is simulated, the camera framed on the first frame, "
                    "instead of from the cache after the simulation, framed on the whole shot");
@@ -230,6 +236,11 @@ CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
   exportApp->add_flag("--obj", options.obj, "write the OBJ sequence");
   exportApp->add_flag("--vdb", options.vdb, "write the OpenVDB sequence");
   exportApp->add_flag("--png", options.png, "render the PNG sequence");
+  exportApp
+      ->add_option("--contacts-view", options.contactsView,
+                   "render the PNG frames in this contact view, xray or opaque, instead of the "
+                   "run's")
+      ->check(CLI::IsMember({"xray", "opaque"}));
   exportApp->add_flag("--contacts", options.contacts, "write the contact JSON sequence");
   exportApp->add_flag("--pc2", options.pc2, "write the PC2 point caches (every frame)");
   exportApp->add_flag("--mdd", options.mdd, "write the MDD point caches (every frame)");

@@ -15,13 +15,14 @@ struct RunOptions : SimulationOverrides {
   SceneLoadOptions load;
   std::filesystem::path out = "out";
   std::optional<int> framePadding;
-  bool contacts = false;            ///< write OUT/contacts/<scene>_0001.json …
-  std::optional<bool> render;       ///< --render / --no-render; unset: the scene's choice
-  std::optional<std::string> size;  ///< "1280x720"
-  bool noContactSpheres = false;    ///< render without the contact spheres
-  bool vdb = false;                 ///< write OUT/vdb/<scene>_0001.vdb …
-  bool pc2 = false;                 ///< write OUT/pc2/<scene>_<body>.pc2 and the rest meshes
-  bool mdd = false;                 ///< write OUT/mdd/<scene>_<body>.mdd and the rest meshes
+  bool contacts = false;                    ///< write OUT/contacts/<scene>_0001.json …
+  std::optional<bool> render;               ///< --render / --no-render; unset: the scene's choice
+  std::optional<std::string> size;          ///< "1280x720"
+  bool noContactSpheres = false;            ///< render without the contact spheres
+  std::optional<std::string> contactsView;  ///< "xray" or "opaque"; unset: the scene's, else auto
+  bool vdb = false;                         ///< write OUT/vdb/<scene>_0001.vdb …
+  bool pc2 = false;  ///< write OUT/pc2/<scene>_<body>.pc2 and the rest meshes
+  bool mdd = false;  ///< write OUT/mdd/<scene>_<body>.mdd and the rest meshes
   std::optional<double> voxelSize;
   bool vdbFog = false;
   std::optional<std::string> upAxis;          ///< "y" or "z", for the VDB export

@@ -36,6 +36,10 @@ RenderOptions renderOptions(const RunOptions& options, const RenderSettings& sce
   render.fovDegrees = scene.fovDegrees.value_or(render.fovDegrees);
   render.contacts = scene.contactSpheres.value_or(render.contacts) && !options.noContactSpheres;
   render.contactColor = scene.contactColor.value_or(render.contactColor);
+  render.contactColorsByKind = scene.contactColorsByKind;
+  if (const std::optional<std::string>& view =
+          options.contactsView ? options.contactsView : scene.contactsView)
+    render.contactsView = *view == "xray" ? ContactsView::XRay : ContactsView::Opaque;
   render.contactRadius = scene.contactRadius.value_or(render.contactRadius);
   render.wireframe = scene.wireframe.value_or(render.wireframe);
   for (const std::optional<Vec3f>& color : scene.bodyColors)

@@ -34,6 +34,7 @@ void eachRecordedOption(Options& options, Visit&& visit) {
   visit("render", options.render);
   visit("size", options.size);
   visit("no-contact-spheres", options.noContactSpheres);
+  visit("contacts-view", options.contactsView);
   visit("render-while-simulating", options.renderWhileSimulating);
   visit("cache-only", options.cacheOnly);
   visit("vdb", options.vdb);

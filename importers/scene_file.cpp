@@ -461,8 +461,9 @@ class SceneParser {
   }
 
   void parseRender(const JsonValue& value) {
-    const JsonObject object = value.object({"size", "samples", "camera", "contact_spheres",
-                                            "contact_color", "contact_radius", "wireframe"});
+    const JsonObject object =
+        value.object({"size", "samples", "camera", "contact_spheres", "contact_color",
+                      "contact_radius", "contacts_view", "wireframe"});
     RenderSettings& render = scene_.render;
     if (auto size = object.find("size")) {
       const std::vector<JsonValue> sides = size->array();
@@ -485,9 +486,21 @@ class SceneParser {
         c.at("target").fail("the camera's target is its position: it would look nowhere");
     }
     if (auto spheres = object.find("contact_spheres")) render.contactSpheres = spheres->boolean();
-    if (auto color = object.find("contact_color")) render.contactColor = colour(*color);
+    if (auto color = object.find("contact_color")) {
+      if (color->isString() && color->string() == "kind")
+        render.contactColorsByKind = true;
+      else if (color->isString())
+        color->fail("expected three numbers in [0, 1] (linear RGB) or \"kind\"");
+      else
+        render.contactColor = colour(*color);
+    }
     if (auto radius = object.find("contact_radius"))
       render.contactRadius = float(radius->numberAbove(0));
+    if (auto view = object.find("contacts_view")) {
+      const std::string name = view->isString() ? view->string() : std::string();
+      if (name != "xray" && name != "opaque") view->fail("expected \"xray\" or \"opaque\"");
+      render.contactsView = name;
+    }
     if (auto wireframe = object.find("wireframe")) render.wireframe = wireframe->boolean();
   }
 

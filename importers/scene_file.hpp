@@ -37,7 +37,9 @@ struct RenderSettings {
   std::optional<float> fovDegrees;
   std::optional<bool> contactSpheres;
   std::optional<Vec3f> contactColor;
+  bool contactColorsByKind = false;  ///< contact_color: "kind"
   std::optional<float> contactRadius;
+  std::optional<std::string> contactsView;  ///< "xray" or "opaque"; unset: automatic
   std::optional<bool> wireframe;
   std::vector<std::optional<Vec3f>> bodyColors;  ///< per body of setup.bodies, linear RGB 0..1
 };

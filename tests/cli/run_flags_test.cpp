@@ -1,6 +1,7 @@
 // `softbake run` flags, each checked by what it changes in the files or the output, not only by
 // the exit status: --fps, --frame-padding, --levels, --response, --vdb-fog, --vdb-compression,
-// --no-contact-spheres, and the progress lines of a run that is not --quiet.
+// --no-contact-spheres, --contacts-view (with export's), and the progress lines of a run that is
+// not --quiet.
 #include <gtest/gtest.h>
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -236,24 +237,25 @@ Image decodePng(const fs::path& path) {
   return image;
 }
 
-/// How far from grey a pixel is: its largest channel less its smallest.
-int chroma(const unsigned char* p) {
-  const auto [low, high] = std::minmax({p[0], p[1], p[2]});
-  return high - low;
+/// How far a pixel is towards the contact colour (a saturated red): red less the larger of green
+/// and blue.
+int redness(const unsigned char* p) {
+  return int(p[0]) - int(std::max(p[1], p[2]));
 }
 
-TEST_F(RunFlags, NoContactSpheresRemovesTheGreySpheresAndNothingElse) {
+TEST_F(RunFlags, NoContactSpheresRemovesTheSpheresAndNothingElse) {
   constexpr int kFrames = 14, kWidth = 320, kHeight = 240;  // the balls meet by frame 14
+  // The view held, so only the spheres differ: without them the default view would be opaque.
   for (const bool spheres : {true, false}) {
     const Result run =
         runSoftbake("run --render --contacts -q --size " + std::to_string(kWidth) + "x" +
                     std::to_string(kHeight) + " --frames " + std::to_string(kFrames) +
-                    (spheres ? "" : " --no-contact-spheres") + " -o " +
+                    (spheres ? "" : " --no-contact-spheres --contacts-view xray") + " -o " +
                     quoted(folder_ / (spheres ? "on" : "off")));
     ASSERT_EQ(run.exitCode, 0) << run.output;
   }
   int framesWithContacts = 0, framesWithVisibleSpheres = 0;
-  long chromaWith = 0, chromaWithout = 0;
+  long rednessWith = 0, rednessWithout = 0;
   for (int frame = 1; frame <= kFrames; ++frame) {
     char name[32];
     std::snprintf(name, sizeof name, "default_%04d", frame);
@@ -268,30 +270,73 @@ TEST_F(RunFlags, NoContactSpheresRemovesTheGreySpheresAndNothingElse) {
       continue;
     }
     ++framesWithContacts;
-    // The spheres are grey (antialiased, a few pixels across, over coloured bodies): where the
-    // images differ, the one with spheres is the less colourful.
+    // The spheres are red (antialiased, a few pixels across, over translucent bodies): where the
+    // images differ, the one with spheres is the redder.
     int changed = 0;
     long frameWith = 0, frameWithout = 0;
     for (std::size_t i = 0; i < with.rgb.size(); i += 3) {
       if (std::equal(&with.rgb[i], &with.rgb[i] + 3, &without.rgb[i])) continue;
       ++changed;
-      frameWith += chroma(&with.rgb[i]);
-      frameWithout += chroma(&without.rgb[i]);
+      frameWith += redness(&with.rgb[i]);
+      frameWithout += redness(&without.rgb[i]);
     }
-    // Contacts lie where the bodies press into each other, so on some frames the bodies hide
-    // every sphere (what the contact view of issue 18 is for); the frames that show one must show
-    // it grey.
+    // Plane contacts lie under a body; the others where the bodies press into each other. The
+    // contact view shows them all.
     if (changed == 0) continue;
     ++framesWithVisibleSpheres;
-    EXPECT_LT(frameWith, frameWithout) << name << ": the changed pixels did not turn greyer";
-    chromaWith += frameWith;
-    chromaWithout += frameWithout;
+    EXPECT_GT(frameWith, frameWithout) << name << ": the changed pixels did not turn redder";
+    rednessWith += frameWith;
+    rednessWithout += frameWithout;
   }
   EXPECT_GT(framesWithContacts, 0) << "the balls never met: the test shows nothing";
-  EXPECT_GT(framesWithVisibleSpheres, 0)
-      << "contacts on " << framesWithContacts << " frames, but no sphere was drawn";
-  // Measured: the spheres take 64% of the colour away from the pixels they change.
-  EXPECT_LT(chromaWith, chromaWithout / 2);
+  EXPECT_EQ(framesWithVisibleSpheres, framesWithContacts)
+      << "frames whose contacts drew no sphere in the contact view";
+  EXPECT_GT(rednessWith, rednessWithout + 50L * framesWithContacts);
+}
+
+TEST_F(RunFlags, ContactsViewChoosesHowTheBodiesAreDrawnInRunSceneAndExport) {
+  // The built-in scene: two balls that meet, so the contact view is the default.
+  const auto render = [&](const std::string& name, const std::string& options) {
+    const Result run = runSoftbake("run --render --size 160x120 --frames 13 -q -o " +
+                                   quoted(folder_ / name) + " " + options);
+    EXPECT_EQ(run.exitCode, 0) << run.output;
+    return readFile(folder_ / name / "png/default_0013.png");
+  };
+  const std::string automatic = render("automatic", "");
+  const std::string xray = render("xray", "--contacts-view xray");
+  const std::string opaque = render("opaque", "--contacts-view opaque");
+  ASSERT_FALSE(automatic.empty());
+  EXPECT_TRUE(automatic == xray) << "two bodies that meet: the contact view by default";
+  EXPECT_FALSE(xray == opaque);
+  // Without spheres there is nothing to see through to: opaque by default.
+  EXPECT_TRUE(render("bare", "--no-contact-spheres") ==
+              render("bareOpaque", "--no-contact-spheres --contacts-view opaque"));
+
+  // The scene's render.contacts_view, and the flag over it.
+  nlohmann::json scene = nlohmann::json::parse(readFile(example("default")));
+  const std::string fileXray = render("file", quoted(example("default")));
+  const std::string fileOpaque =
+      render("fileOpaque", quoted(example("default")) + " --contacts-view opaque");
+  EXPECT_FALSE(fileXray == fileOpaque);
+  scene["render"]["contacts_view"] = "opaque";
+  const fs::path file = writeScene("default.json", scene.dump());
+  EXPECT_TRUE(render("scene", quoted(file)) == fileOpaque);
+  EXPECT_TRUE(render("sceneFlag", quoted(file) + " --contacts-view xray") == fileXray);
+
+  // export renders the run's view, or the one it is given.
+  const Result again = runSoftbake("export " + quoted(folder_ / "automatic") +
+                                   " --png --frames 13 -q --contacts-view opaque");
+  ASSERT_EQ(again.exitCode, 0) << again.output;
+  EXPECT_TRUE(readFile(folder_ / "automatic/png/default_0013.png") == opaque);
+  const Result back =
+      runSoftbake("export " + quoted(folder_ / "automatic") + " --png --frames 13 -q");
+  ASSERT_EQ(back.exitCode, 0) << back.output;
+  EXPECT_TRUE(readFile(folder_ / "automatic/png/default_0013.png") == xray);
+
+  const Result wrong = runSoftbake("run --contacts-view glass --frames 1 --no-render -o " +
+                                   quoted(folder_ / "wrong"));
+  EXPECT_EQ(wrong.exitCode, 1);
+  EXPECT_NE(wrong.output.find("--contacts-view"), std::string::npos) << wrong.output;
 }
 
 TEST_F(RunFlags, WithoutQuietALogGetsAProgressLineEveryTenthOfTheRun) {

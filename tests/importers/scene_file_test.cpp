@@ -399,7 +399,7 @@ TEST(SceneFile, ReadsTheRenderKeysAndBodyColours) {
     "bodies": [{"mesh": {"primitive": "icosphere"}, "color": [0.9, 0.2, 0.1]},
                {"mesh": {"primitive": "icosphere"}}],
     "render": {"size": [640, 360], "samples": 8, "wireframe": true, "contact_spheres": false,
-               "contact_color": [1, 0, 0], "contact_radius": 0.02,
+               "contact_color": [1, 0, 0], "contact_radius": 0.02, "contacts_view": "opaque",
                "camera": {"position": [0, 2, 6], "target": [0, 1, 0], "fov": 35}}
   })");
   const RenderSettings& render = scene.render;
@@ -408,6 +408,13 @@ TEST(SceneFile, ReadsTheRenderKeysAndBodyColours) {
   EXPECT_EQ(render.samples, std::optional<int>(8));
   EXPECT_EQ(render.wireframe, std::optional<bool>(true));
   EXPECT_EQ(render.contactSpheres, std::optional<bool>(false));
+  EXPECT_EQ(render.contactsView, std::optional<std::string>("opaque"));
+  EXPECT_FALSE(render.contactColorsByKind);
+  const SceneFile xray = parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}],
+    "render": {"contacts_view": "xray", "contact_color": "kind"}})");
+  EXPECT_EQ(xray.render.contactsView, std::optional<std::string>("xray"));
+  EXPECT_TRUE(xray.render.contactColorsByKind);
+  EXPECT_FALSE(xray.render.contactColor);
   ASSERT_TRUE(render.cameraPosition && render.cameraTarget);
   EXPECT_TRUE(render.cameraPosition->isApprox(Vec3f(0, 2, 6)));
   EXPECT_FLOAT_EQ(*render.fovDegrees, 35);
@@ -426,6 +433,12 @@ TEST(SceneFile, RenderKeyErrorsNameTheKeyPath) {
       sceneError(R"({"render": {"camera": {"position": [0, 1, 2], "target": [0, 1, 2]}}, )" + body +
                  "}"),
       ::testing::HasSubstr("render.camera.target: the camera's target is its position"));
+  EXPECT_THAT(sceneError(R"({"render": {"contacts_view": "glass"}, )" + body + "}"),
+              ::testing::HasSubstr(R"(render.contacts_view: expected "xray" or "opaque")"));
+  EXPECT_THAT(sceneError(R"({"render": {"contacts_view": true}, )" + body + "}"),
+              ::testing::HasSubstr("render.contacts_view: expected"));
+  EXPECT_THAT(sceneError(R"({"render": {"contact_color": "red"}, )" + body + "}"),
+              ::testing::HasSubstr("render.contact_color: expected three numbers"));
   EXPECT_THAT(
       sceneError(R"({"bodies": [{"mesh": {"primitive": "icosphere"}, "color": [2, 0, 0]}]})"),
       ::testing::HasSubstr("bodies[0].color"));
