@@ -352,9 +352,6 @@ class SceneParser {
     }
     if (!body.pins.vertices.empty())
       pinFileVertices(pinsValue->child("indices"), meshValue, numbering, body.pins.vertices);
-    if (!body.pins.particles.empty())
-      checkParticlePins(pinsValue->child("particles"), meshValue, meshes.front(),
-                        body.pins.particles);
     for (TriangleMesh& mesh : meshes) {
       BodySetup split = body;
       if (meshes.size() > 1) split.name = cat(body.name, '/', mesh.name);
@@ -362,6 +359,9 @@ class SceneParser {
       if (!inserted)
         value.fail(cat("body name '", split.name, "' is already used by ", existing->second));
       transformMesh(mesh, transform);
+      // Welded where core will weld it: a non-uniform scale changes which vertices are one.
+      if (!body.pins.particles.empty())
+        checkParticlePins(pinsValue->child("particles"), meshValue, mesh, body.pins.particles);
       mesh.name = split.name;
       split.mesh = std::move(mesh);
       scene_.setup.bodies.push_back(std::move(split));

@@ -26,6 +26,22 @@ TEST_F(ExitStatus, EveryKindOfBadInputIsOne) {
   }
 }
 
+TEST_F(ExitStatus, APinPastTheMeshFileIsOneNamingTheSceneTheKeyTheFileAndItsCount) {
+  // One triangle; its `v` statements are the file's vertices 0 to 2.
+  std::ofstream(folder_ / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n";
+  const std::filesystem::path scene =
+      writeScene("scene.json", R"({"bodies": [{"mesh": "tri.obj", "pins": {"indices": [2, 3]}}]})");
+  const Result result =
+      runSoftbake("run " + quoted(scene) + " --frames 2 --no-render -o " + quoted(folder_ / "out"));
+  EXPECT_EQ(result.exitCode, 1) << result.output;
+  EXPECT_NE(result.output.find(scene.string() +
+                               ": bodies[0].pins.indices[1]: vertex 3 is beyond the 3 vertices "
+                               "of tri.obj (indices count from 0)"),
+            std::string::npos)
+      << result.output;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "out"));
+}
+
 TEST_F(ExitStatus, AMisspeltCommandIsNamedWithTheNearestOne) {
   const Result result = runSoftbake("rnu");
   EXPECT_EQ(result.exitCode, 1);
