@@ -259,6 +259,37 @@ TEST_F(CliTest, ContactsAreWrittenPerFrameWhenAsked) {
   EXPECT_NE(manifest.dump().find("contacts/default_####.json"), std::string::npos);
 }
 
+// Figure 5 of the paper: one body and the ground. Its contacts are all with the plane; with the
+// response they hold the ball up, and detection alone (figure 5b) still finds them.
+TEST_F(CliTest, PlaneContactsAreWrittenWithAndWithoutResponse) {
+  const fs::path scene = examples() / "fig5_ground.json";
+  for (const bool respond : {true, false}) {
+    const fs::path out = folder_ / (respond ? "respond" : "detect");
+    const Result run =
+        runSoftbake("run " + quoted(scene.string()) + " --frames 48 --contacts --no-render -q" +
+                    (respond ? "" : " --response none") + " -o " + quoted(out.string()));
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    EXPECT_NE(run.output.find("plane contacts over all substeps: "), std::string::npos)
+        << run.output;
+    std::size_t framesWithContacts = 0;
+    for (int frame = 1; frame <= 48; ++frame) {
+      char name[64];
+      std::snprintf(name, sizeof name, "contacts/fig5_ground_%04d.json", frame);
+      const nlohmann::json contacts = nlohmann::json::parse(readFile(out / name)).at("contacts");
+      framesWithContacts += !contacts.empty();
+      for (const nlohmann::json& contact : contacts) {
+        EXPECT_EQ(contact.at("kind"), "plane");
+        EXPECT_EQ(contact.at("bodies"), nlohmann::json::array({"ball", "ground"}));
+        EXPECT_NEAR(contact.at("position")[1].get<double>(), 0, 1e-6) << "on the ground";
+        EXPECT_TRUE(contact.at("particle").is_number_integer());
+      }
+    }
+    // The ball falls 1.5 m to the ground in about 13 frames, then bounces lower and lower (or,
+    // without a response, goes on down through it).
+    EXPECT_GT(framesWithContacts, 16u) << (respond ? "with" : "without") << " response";
+  }
+}
+
 TEST_F(CliTest, NoResponseLetsTheBallFallThroughTheGround) {
   const fs::path scene = examples() / "fig5_ground.json";
   const fs::path out = folder_ / "out";
