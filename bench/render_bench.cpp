@@ -5,15 +5,24 @@
 /// the same on every machine), so every frame uploads new vertices and normals.
 ///
 ///   render_bench --faces 10240 --width 1280 --height 720 --frames 30 --png last.png
+///   render_bench --faces 102400 --contacts 500 --contacts-view opaque,xray
 ///   render_bench --compare a.png b.png [--tolerance 8]
 ///
 /// Per frame it times FrameRenderer::renderRgb (upload, draw, multisample resolve, glReadPixels,
 /// which waits for the GPU) and, apart from it, the PNG encoding. The first frame (lazy shader
 /// compilation, first uploads) and the renderer's construction (EGL context, shaders,
-/// framebuffers) are reported separately and left out of the mean and minimum. The last line is
-/// machine-readable:
+/// framebuffers) are reported separately and left out of the mean and minimum. Each view of
+/// --contacts-view (opaque, xray: the contact view with translucent bodies; default: the
+/// renderer's automatic choice) is timed on the same frames, each ending on a machine-readable
+/// line:
 ///
-///   render_bench faces=... width=... height=... frames=... ms_per_frame=... renderer=...
+///   render_bench faces=... width=... height=... frames=... contacts_view=... ms_per_frame=...
+///
+/// and with two views, a last line with their ratios (render_bench_ratio xray_over_opaque
+/// mean=... median=... min=...). The views take turns frame by frame, so load from other work on
+/// the machine falls on both alike.
+/// --contacts N puts N contacts on the balls' surfaces every frame (evenly over the particles),
+/// drawn as spheres in either view.
 ///
 /// --compare reads two PNGs and counts the pixels whose channels differ by more than the
 /// tolerance in any channel, the first ten of them by position (the check that a GPU draws the
@@ -61,13 +70,16 @@ struct Options {
   int samples = 4;
   std::string png;       ///< where the last frame goes; empty: nowhere
   std::string platform;  ///< EglOptions::platform; empty: SOFTBAKE_EGL_PLATFORM, else "auto"
+  int contacts = 0;      ///< contact spheres per frame
+  std::vector<ContactsView> views{ContactsView::Automatic};
 };
 
 [[noreturn]] void usage(const char* message) {
   std::fprintf(stderr,
                "render_bench: %s\n"
                "usage: render_bench [--faces 1280|10240|102400|983040] [--width W] [--height H]\n"
-               "                    [--frames F] [--samples S] [--png PATH]\n"
+               "                    [--frames F] [--samples S] [--png PATH] [--contacts N]\n"
+               "                    [--contacts-view opaque|xray|automatic[,...]]\n"
                "                    [--platform auto|surfaceless|device|default]\n"
                "       render_bench --compare A.png B.png [--tolerance T]\n",
                message);
@@ -85,7 +97,7 @@ int toInt(const char* text, const char* flag) {
 /// Frame `number` (1-based): the rest state with every ball squashed towards the ground by up to
 /// 10% and widened to match, a cycle of 16 frames. Multiplications only, so the same on every
 /// machine: the images of two machines differ only where their renderers do.
-void fillFrame(const SceneTopology& topology, int number, Frame& frame) {
+void fillFrame(const SceneTopology& topology, int number, int contacts, Frame& frame) {
   frame.number = number;
   frame.time = (number - 1) / 24.0;
   frame.positions.resize(topology.restPosition.size());
@@ -110,14 +122,26 @@ void fillFrame(const SceneTopology& topology, int number, Frame& frame) {
                center.z() + (p.z() - center.z()) * widen);
     }
   }
+  // Contacts on the squashed surfaces, every (particles / contacts)-th particle.
+  const std::size_t particles = frame.positions.size();
+  for (int c = 0; c < contacts && particles > 0; ++c) {
+    Contact contact;
+    contact.particle = Index(std::size_t(c) * particles / std::size_t(contacts));
+    contact.position = frame.positions[contact.particle];
+    contact.kind = ContactKind::ParticleTriangle;
+    frame.contacts.push_back(contact);
+  }
 }
 
 struct Stats {
-  double mean = 0, min = 0, max = 0;
+  double mean = 0, median = 0, min = 0, max = 0;
 };
-Stats stats(const std::vector<double>& values) {
+Stats stats(std::vector<double> values) {
   Stats s;
   if (values.empty()) return s;
+  std::sort(values.begin(), values.end());
+  s.median = values.size() % 2 ? values[values.size() / 2]
+                               : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
   s.min = *std::min_element(values.begin(), values.end());
   s.max = *std::max_element(values.begin(), values.end());
   for (double v : values) s.mean += v;
@@ -131,70 +155,117 @@ std::string token(std::string text) {
   return text;
 }
 
+/// One view's renderer and its times.
+struct ViewRun {
+  std::string name;
+  std::unique_ptr<FrameRenderer> renderer;
+  double setupMs = 0, firstRenderMs = 0, firstEncodeMs = 0;
+  std::vector<double> renderMs, encodeMs;
+  std::string png;
+};
+
 int runBench(const Options& options) {
   const bench::SceneSize& size = bench::sceneSize(options.faces);
   const Clock::time_point buildStart = Clock::now();
   auto topology = std::make_shared<const SceneTopology>(
       buildSceneTopology(bench::ballsScene(size, "render_bench")));
   const double buildMs = msSince(buildStart);
-
-  RenderOptions render;
-  render.width = options.width;
-  render.height = options.height;
-  render.samples = options.samples;
-  render.egl.platform = options.platform;
-
-  const Clock::time_point setupStart = Clock::now();
-  FrameRenderer renderer(makeRenderScene(topology, render), render);
-  const double setupMs = msSince(setupStart);
-  const std::string rendererName = renderer.context().describe();
   std::printf("scene: %d balls, %zu faces, %zu particles (built in %.1f ms)\n", size.balls,
               topology->triangles.size(), topology->restPosition.size(), buildMs);
-  std::printf("EGL platform: %s\nGL: %s\n", renderer.context().platform().c_str(),
-              rendererName.c_str());
-  std::printf("image: %dx%d, %d samples asked\n", options.width, options.height, options.samples);
-  std::printf("renderer setup (EGL context, shaders, framebuffers, ground): %.2f ms\n", setupMs);
+  std::printf("image: %dx%d, %d samples asked; %d contacts a frame\n", options.width,
+              options.height, options.samples, options.contacts);
 
+  std::vector<ViewRun> runs;
+  for (const ContactsView view : options.views) {
+    RenderOptions render;
+    render.width = options.width;
+    render.height = options.height;
+    render.samples = options.samples;
+    render.egl.platform = options.platform;
+    render.contactsView = view;
+    ViewRun& run = runs.emplace_back();
+    run.name = contactsViewName(contactsViewFor(render, *topology));
+    const Clock::time_point setupStart = Clock::now();
+    run.renderer = std::make_unique<FrameRenderer>(makeRenderScene(topology, render), render);
+    run.setupMs = msSince(setupStart);
+  }
+  const EglContext& context = runs.front().renderer->context();
+  std::printf("EGL platform: %s\nGL: %s\n", context.platform().c_str(), context.describe().c_str());
+
+  // The views take turns frame by frame, so a machine busy with other work slows them alike.
   Frame frame;
-  std::vector<double> renderMs, encodeMs;
-  double firstRenderMs = 0, firstEncodeMs = 0;
-  std::string png;
   for (int f = 1; f <= options.frames; ++f) {
-    fillFrame(*topology, f, frame);
-    const Clock::time_point renderStart = Clock::now();
-    const std::vector<std::uint8_t> rgb = renderer.renderRgb(frame);
-    const double rendered = msSince(renderStart);
-    const Clock::time_point encodeStart = Clock::now();
-    png = encodePng(rgb, options.width, options.height);
-    const double encoded = msSince(encodeStart);
-    if (f == 1) {
-      firstRenderMs = rendered;
-      firstEncodeMs = encoded;
-    } else {
-      renderMs.push_back(rendered);
-      encodeMs.push_back(encoded);
+    fillFrame(*topology, f, options.contacts, frame);
+    for (ViewRun& run : runs) {
+      run.renderer->makeCurrent();
+      const Clock::time_point renderStart = Clock::now();
+      const std::vector<std::uint8_t> rgb = run.renderer->renderRgb(frame);
+      const double rendered = msSince(renderStart);
+      const Clock::time_point encodeStart = Clock::now();
+      run.png = encodePng(rgb, options.width, options.height);
+      const double encoded = msSince(encodeStart);
+      if (f == 1) {
+        run.firstRenderMs = rendered;
+        run.firstEncodeMs = encoded;
+      } else {
+        run.renderMs.push_back(rendered);
+        run.encodeMs.push_back(encoded);
+      }
     }
   }
-  if (!options.png.empty()) {
-    std::ofstream file(options.png, std::ios::binary | std::ios::trunc);
-    file.write(png.data(), std::streamsize(png.size()));
-    if (!file.flush()) throw Error("cannot write " + options.png);
-    std::printf("last frame (%d): %s, %zu bytes\n", options.frames, options.png.c_str(),
-                png.size());
+
+  for (const ViewRun& run : runs) {
+    std::printf("\ncontacts view: %s\n", run.name.c_str());
+    std::printf("renderer setup (EGL context, shaders, framebuffers, ground): %.2f ms\n",
+                run.setupMs);
+    if (!options.png.empty()) {
+      const std::string path = runs.size() > 1 ? run.name + "_" + options.png : options.png;
+      std::ofstream file(path, std::ios::binary | std::ios::trunc);
+      file.write(run.png.data(), std::streamsize(run.png.size()));
+      if (!file.flush()) throw Error("cannot write " + path);
+      std::printf("last frame (%d): %s, %zu bytes\n", options.frames, path.c_str(), run.png.size());
+    }
+    const Stats r = stats(run.renderMs), e = stats(run.encodeMs);
+    std::printf("first frame: render %.2f ms, PNG encode %.2f ms\n", run.firstRenderMs,
+                run.firstEncodeMs);
+    std::printf(
+        "frames 2..%d: render mean %.3f ms, median %.3f ms, min %.3f ms, max %.3f ms; PNG encode "
+        "mean %.3f ms, min %.3f ms\n",
+        options.frames, r.mean, r.median, r.min, r.max, e.mean, e.min);
+    std::printf(
+        "render_bench faces=%zu width=%d height=%d frames=%d samples=%d contacts=%d "
+        "contacts_view=%s ms_per_frame=%.3f ms_median=%.3f ms_min=%.3f encode_ms=%.3f "
+        "first_frame_ms=%.2f setup_ms=%.2f platform=%s renderer=%s\n",
+        topology->triangles.size(), options.width, options.height, options.frames, options.samples,
+        options.contacts, run.name.c_str(), r.mean, r.median, r.min, e.mean, run.firstRenderMs,
+        run.setupMs, token(context.platform()).c_str(), token(context.describe()).c_str());
   }
-  const Stats r = stats(renderMs), e = stats(encodeMs);
-  std::printf("first frame: render %.2f ms, PNG encode %.2f ms\n", firstRenderMs, firstEncodeMs);
-  std::printf(
-      "frames 2..%d: render mean %.3f ms, min %.3f ms, max %.3f ms; PNG encode mean %.3f "
-      "ms, min %.3f ms\n",
-      options.frames, r.mean, r.min, r.max, e.mean, e.min);
-  std::printf(
-      "render_bench faces=%zu width=%d height=%d frames=%d samples=%d ms_per_frame=%.3f "
-      "ms_min=%.3f encode_ms=%.3f first_frame_ms=%.2f setup_ms=%.2f platform=%s renderer=%s\n",
-      topology->triangles.size(), options.width, options.height, options.frames, options.samples,
-      r.mean, r.min, e.mean, firstRenderMs, setupMs, token(renderer.context().platform()).c_str(),
-      token(rendererName).c_str());
+  if (runs.size() == 2) {
+    const Stats a = stats(runs[0].renderMs), b = stats(runs[1].renderMs);
+    std::printf("render_bench_ratio %s_over_%s mean=%.3f median=%.3f min=%.3f\n",
+                runs[1].name.c_str(), runs[0].name.c_str(), b.mean / a.mean, b.median / a.median,
+                b.min / a.min);
+  }
   return 0;
+}
+
+std::vector<ContactsView> parseViews(std::string_view list) {
+  std::vector<ContactsView> views;
+  while (!list.empty()) {
+    const std::size_t comma = list.find(',');
+    const std::string_view name = list.substr(0, comma);
+    if (name == "xray")
+      views.push_back(ContactsView::XRay);
+    else if (name == "opaque")
+      views.push_back(ContactsView::Opaque);
+    else if (name == "automatic")
+      views.push_back(ContactsView::Automatic);
+    else
+      usage(("unknown contacts view " + std::string(name)).c_str());
+    list = comma == std::string_view::npos ? std::string_view() : list.substr(comma + 1);
+  }
+  if (views.empty()) usage("--contacts-view needs a view");
+  return views;
 }
 
 /// Counts the pixels of two same-sized PNGs that differ by more than `tolerance` in any channel.
@@ -262,6 +333,10 @@ int main(int argc, char** argv) {
       options.png = value("--png");
     else if (arg == "--platform")
       options.platform = value("--platform");
+    else if (arg == "--contacts")
+      options.contacts = toInt(value("--contacts"), "--contacts");
+    else if (arg == "--contacts-view")
+      options.views = parseViews(value("--contacts-view"));
     else if (arg == "--tolerance")
       tolerance = toInt(value("--tolerance"), "--tolerance");
     else if (arg == "--compare") {

@@ -116,6 +116,10 @@ class FrameRenderer {
   /// Renders and writes the PNG atomically (temporary file, then rename); returns its size.
   std::size_t writePng(const Frame& frame, const std::filesystem::path& path);
 
+  /// Makes this renderer's context current again, where several renderers take turns on one
+  /// thread (a benchmark comparing them frame by frame).
+  void makeCurrent() { context_->makeCurrent(); }
+
   const RenderScene& scene() const { return scene_; }
   const RenderOptions& options() const { return options_; }
   const EglContext& context() const { return *context_; }
