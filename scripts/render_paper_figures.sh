@@ -32,6 +32,8 @@ render examples/fig4_two_bodies.json 13 fig4_frame13
 kinds=$work/fig4_kinds.json
 sed 's/"output": { "contacts": true }/"output": { "contacts": true },\n  "render": { "contact_color": "kind" }/' \
   examples/fig4_two_bodies.json >"$kinds"
+grep -q '"contact_color": "kind"' "$kinds" ||
+  { echo "render_paper_figures: could not add render.contact_color to fig4_two_bodies.json" >&2; exit 1; }
 render "$kinds" 13 fig4_kinds_frame13
 # Figure 5: the ball on the ground with the response (5a), and falling through it without (5b).
 # Its contacts are plane contacts, under the ball: one body keeps solid bodies by default, so the
