@@ -102,7 +102,7 @@ ContactsView contactsViewFor(const RenderOptions& options, const SceneTopology& 
 Vec3f contactKindColor(ContactKind kind) {
   switch (kind) {
     case ContactKind::EdgeTriangle:
-      return kContactColor;
+      return defaultContactColor();
     case ContactKind::ParticleTriangle:
       return {1.0f, 0.42f, 0.0f};
     case ContactKind::Corner:
@@ -110,7 +110,7 @@ Vec3f contactKindColor(ContactKind kind) {
     case ContactKind::Plane:
       return {0.0f, 0.25f, 1.0f};
   }
-  return kContactColor;
+  return defaultContactColor();
 }
 
 Vec3f bodyColor(const RenderOptions& options, std::size_t index) {

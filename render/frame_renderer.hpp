@@ -38,8 +38,11 @@ enum class ContactsView : std::uint8_t {
 std::string_view contactsViewName(ContactsView view);
 
 /// The default contact colour, linear RGB: a saturated red, which no body of the soft palette
-/// (saturation 0.55) and not the grey ground (0.5) comes near.
-inline const Vec3f kContactColor(1.0f, 0.06f, 0.03f);
+/// (saturation 0.55) and not the grey ground (0.5) comes near. A function, since an Eigen
+/// constant would be initialised at run time, in no set order with other files' globals.
+inline Vec3f defaultContactColor() {
+  return {1.0f, 0.06f, 0.03f};
+}
 
 struct RenderOptions {
   int width = 1280, height = 720;  ///< pixels
@@ -47,11 +50,11 @@ struct RenderOptions {
   /// Camera; when position or target is unset, framed automatically (see frameCamera()).
   std::optional<Vec3f> cameraPosition;
   std::optional<Vec3f> cameraTarget;
-  float fovDegrees = 40;               ///< vertical field of view
-  bool contacts = true;                ///< draw the frame's contacts as spheres
-  Vec3f contactColor = kContactColor;  ///< linear RGB, 0..1
-  bool contactColorsByKind = false;    ///< colour each contact by its kind (contactKindColor())
-  float contactRadius = 0;             ///< m; 0: 1.5% of the scene's size
+  float fovDegrees = 40;                       ///< vertical field of view
+  bool contacts = true;                        ///< draw the frame's contacts as spheres
+  Vec3f contactColor = defaultContactColor();  ///< linear RGB, 0..1
+  bool contactColorsByKind = false;  ///< colour each contact by its kind (contactKindColor())
+  float contactRadius = 0;           ///< m; 0: 1.5% of the scene's size
   ContactsView contactsView = ContactsView::Automatic;
   bool wireframe = false;  ///< draw the bodies' edges over their surfaces
   /// Per body, linear RGB 0..1; bodies without an entry (or with a negative red) take the palette.

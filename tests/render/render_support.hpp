@@ -22,9 +22,9 @@ struct Image {
   }
 };
 
-/// Whether a pixel shows the default contact colour (kContactColor, a saturated red), shaded or
-/// seen through a translucent body: red well above green and blue. No body of the palette's first
-/// colours, the ground, the grid or the background passes.
+/// Whether a pixel shows the default contact colour (defaultContactColor(), a saturated red),
+/// shaded or seen through a translucent body: red well above green and blue. No body of the
+/// palette's first colours, the ground, the grid or the background passes.
 inline bool showsContactColor(const std::uint8_t* p) {
   return p[0] >= 100 && int(p[0]) - int(std::max(p[1], p[2])) >= 60;
 }
