@@ -143,7 +143,7 @@ TEST(ContactView, IsTheDefaultWhereSurfacesCanTouchEachOther) {
   EXPECT_EQ(contactsViewName(ContactsView::Opaque), "opaque");
 }
 
-TEST(ContactView, Figure4sContactsChangeAtLeastATwoHundredthOfItsPixels) {
+TEST(ContactView, Figure4sContactsChangeAtLeastAFifthOfAPercentOfItsPixels) {
   const Figure4& figure = figure4();
   ASSERT_GE(contactsBetweenSurfaces(figure.pressed), 100u)
       << "figure 4 never pressed its bodies together with 100 contacts by frame 48";
