@@ -210,6 +210,8 @@ const std::map<std::string, Keyword>& keywords() {
                       }});
     k.emplace("no_contact_spheres",
               flagKeyword(S::Run, "--no-contact-spheres", &RunOptions::noContactSpheres));
+    k.emplace("contacts_view", choiceKeyword(S::Run, "--contacts-view", {"xray", "opaque"},
+                                             &RunOptions::contactsView));
     k.emplace("render_while_simulating",
               flagKeyword(S::Run, "--render-while-simulating", &RunOptions::renderWhileSimulating));
     k.emplace("pc2", flagKeyword(S::Run, "--pc2", &RunOptions::pc2));

@@ -435,8 +435,8 @@ options: the flags of `softbake run`, named without their dashes and with '_' fo
   frames, fps, integrator, substeps ('auto' or a count), broadphase, levels, response,
   no_response, no_pair_cache, frame_padding, contacts, render (True: --render, False:
   --no-render, None: the scene's choice), size ('1280x720' or (1280, 720)), no_contact_spheres,
-  render_while_simulating, vdb, voxel_size, vdb_fog, vdb_compression, up, pc2, mdd, threads, quiet,
-  max_output_gib, no_cache, checkpoint_every, cache_only, resume, accept_lossy_import,
+  contacts_view ('xray' or 'opaque'), render_while_simulating, vdb, voxel_size, vdb_fog,
+  vdb_compression, up, pc2, mdd, threads, quiet, max_output_gib, no_cache, checkpoint_every, cache_only, resume, accept_lossy_import,
   max_vertices, max_faces, max_import_memory, max_bodies.
 
 Returns the command's exit code: 0, or 130/143 when SIGINT/SIGTERM stopped it after a frame (the
