@@ -18,6 +18,7 @@
 #include "exporters/obj_sequence_writer.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
+#include "tests/support/obj_text.hpp"
 
 namespace softbake {
 namespace {
@@ -197,42 +198,6 @@ TEST(PinsByFileIndex, AFormatWithoutAKnownNumberingIsRefusedByName) {
 }
 
 /// The `v`, `vt` and `f` statements of an OBJ softbake wrote (triangles, v/vt/vn).
-struct WrittenObj {
-  std::vector<Vec3f> v;
-  std::vector<Vec2f> vt;
-  std::vector<std::array<std::array<long, 2>, 3>> faces;  ///< v, vt per corner, 1-based
-};
-
-float number(std::string_view text) {
-  float value = 0;
-  std::from_chars(text.data(), text.data() + text.size(), value);
-  return value;
-}
-
-WrittenObj readWrittenObj(const std::string& text) {
-  WrittenObj obj;
-  std::istringstream lines(text);
-  std::string line;
-  while (std::getline(lines, line)) {
-    std::istringstream words(line);
-    std::string keyword, a, b, c;
-    words >> keyword >> a >> b >> c;
-    if (keyword == "v") obj.v.emplace_back(number(a), number(b), number(c));
-    if (keyword == "vt") obj.vt.emplace_back(number(a), number(b));
-    if (keyword == "f") {
-      auto& face = obj.faces.emplace_back();
-      int k = 0;
-      for (const std::string& corner : {a, b, c}) {
-        const std::size_t slash = corner.find('/');
-        face[std::size_t(k)] = {std::stol(corner.substr(0, slash)),
-                                std::stol(corner.substr(slash + 1))};
-        ++k;
-      }
-    }
-  }
-  return obj;
-}
-
 TEST(ObjExportOfAUvMesh, WritesEachDistinctUvOnceAndEveryCornerTheFilesUv) {
   test::ScratchDir dir;
   const GridObj input = gridObj();
@@ -245,7 +210,7 @@ TEST(ObjExportOfAUvMesh, WritesEachDistinctUvOnceAndEveryCornerTheFilesUv) {
   frame.number = 1;
   frame.positions = topology->restPosition;
   writer.write(frame);
-  const WrittenObj output = readWrittenObj(readText(writer.framePath(1)));
+  const test::ParsedObj output = test::parseObj(readText(writer.framePath(1)));
 
   std::set<std::pair<float, float>> distinct;
   for (const auto& corners : input.corners)
