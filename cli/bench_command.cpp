@@ -150,6 +150,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
     }
     record.framesSimulated += double(substep) / substeps;
     if (substep < substeps) break;  // the step limit ended the run inside this frame
+    simulator.endFrame();
     computeVolumes(simulator.topology(), simulator.state(), volumes);
     for (std::size_t b = 0; b < simulator.topology().bodies.size(); ++b) {
       const Body& body = simulator.topology().bodies[b];

@@ -137,6 +137,9 @@ void Simulator::step(int frame) {
 
 void Simulator::beginFrame() {
   stats_ = {};
+  // The collision stage refills contacts_ every substep; without it they would still hold the
+  // last frame's plane contacts.
+  if (!collides_) contacts_.clear();
   // Surfaces still tangled are left to the detangler and the response until a frame finds them
   // apart.
   if ((failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any()))
@@ -152,8 +155,10 @@ void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
 void Simulator::advanceToFrame(int frame) {
   beginFrame();
   for (int s = 0; s < substeps_.substeps; ++s) step(frame);
-  // The collision stage refills contacts_ every substep; without it they would be last frame's.
-  if (!collides_) contacts_.clear();
+  endFrame();
+}
+
+void Simulator::endFrame() {
   appendPlaneContacts(*topology_, state_,
                       topology_->settings.collisions.response != ResponseMode::None, contacts_);
 }

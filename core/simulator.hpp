@@ -94,7 +94,11 @@ class Simulator {
   /// "auto" substeps, chooses the frame's substeps again from the speeds now.
   void beginFrame();
 
-  /// All substeps from frame `frame − 1` to `frame`: beginFrame(), then substeps().substeps steps.
+  /// Ends a frame after its substeps: adds the particles touching a plane to contacts().
+  void endFrame();
+
+  /// All substeps from frame `frame − 1` to `frame`: beginFrame(), substeps().substeps steps,
+  /// endFrame().
   void advanceToFrame(int frame);
 
   /// At a frame boundary (after advanceToFrame), what the next frames depend on.
