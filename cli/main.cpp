@@ -20,6 +20,7 @@
 #include "cli/wedge.hpp"
 #include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
+#include "render/frame_renderer.hpp"
 
 #ifndef SOFTBAKE_VERSION
 #define SOFTBAKE_VERSION "unknown"
@@ -173,7 +174,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "xray: bodies translucent, so the contacts inside show (the default when "
                    "contact spheres are drawn and bodies can touch each other or themselves); "
                    "opaque: bodies solid")
-      ->check(CLI::IsMember({"xray", "opaque"}));
+      ->check(CLI::IsMember(softbake::contactsViewNames()));
   runApp->add_flag("--render-while-simulating", run.renderWhileSimulating,
                    "render each frame as it is simulated, the camera framed on the first frame, "
                    "instead of from the cache after the simulation, framed on the whole shot");
@@ -240,7 +241,7 @@ CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
       ->add_option("--contacts-view", options.contactsView,
                    "render the PNG frames in this contact view, xray or opaque, instead of the "
                    "run's")
-      ->check(CLI::IsMember({"xray", "opaque"}));
+      ->check(CLI::IsMember(softbake::contactsViewNames()));
   exportApp->add_flag("--contacts", options.contacts, "write the contact JSON sequence");
   exportApp->add_flag("--pc2", options.pc2, "write the PC2 point caches (every frame)");
   exportApp->add_flag("--mdd", options.mdd, "write the MDD point caches (every frame)");

@@ -39,7 +39,7 @@ RenderOptions renderOptions(const RunOptions& options, const RenderSettings& sce
   render.contactColorsByKind = scene.contactColorsByKind;
   if (const std::optional<std::string>& view =
           options.contactsView ? options.contactsView : scene.contactsView)
-    render.contactsView = *view == "xray" ? ContactsView::XRay : ContactsView::Opaque;
+    render.contactsView = parseContactsView(*view);
   render.contactRadius = scene.contactRadius.value_or(render.contactRadius);
   render.wireframe = scene.wireframe.value_or(render.wireframe);
   for (const std::optional<Vec3f>& color : scene.bodyColors)

@@ -10,6 +10,7 @@
 #include "core/collision/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/text.hpp"
+#include "render/frame_renderer.hpp"
 
 namespace py = pybind11;
 
@@ -210,7 +211,7 @@ const std::map<std::string, Keyword>& keywords() {
                       }});
     k.emplace("no_contact_spheres",
               flagKeyword(S::Run, "--no-contact-spheres", &RunOptions::noContactSpheres));
-    k.emplace("contacts_view", choiceKeyword(S::Run, "--contacts-view", {"xray", "opaque"},
+    k.emplace("contacts_view", choiceKeyword(S::Run, "--contacts-view", contactsViewNames(),
                                              &RunOptions::contactsView));
     k.emplace("render_while_simulating",
               flagKeyword(S::Run, "--render-while-simulating", &RunOptions::renderWhileSimulating));
