@@ -578,9 +578,10 @@ void FrameRenderer::drawStatics() {
   glDrawElements(GL_TRIANGLES, gl.statics.indexCount, GL_UNSIGNED_INT, nullptr);
 }
 
-/// The contact view's bodies: every layer of every body accumulated into the transparency
-/// targets, tested against the opaque pass's depth but not writing it, so the order they are
-/// drawn in does not matter; the wireframe's edges go in as more opaque layers.
+/// The contact view's bodies: their layers (a closed body's front layer only, both sides of an
+/// open one) accumulated into the transparency targets, tested against the opaque pass's depth
+/// but not writing it, so the order they are drawn in does not matter; the wireframe's edges go
+/// in as more opaque layers.
 void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
