@@ -45,39 +45,33 @@ void computeVolumes(const SceneTopology& topology, const SimulationState& state,
 void computePressureForces(const SceneTopology& topology, const SimulationState& state,
                            ForceBuffers& forces);
 
-/// Every force on particle `i`: gravity, then its springs, then its triangles' pressure, summed in
-/// the fixed order of its incidence rows (so the sum is the same for any thread count).
-/// `springForceAt(r)` is the force on `i` of the spring at its row entry r (topology.springRefs):
-/// the force buffers' for particleForce(), the implicit step's own for its assembly.
-template <class SpringForceAt>
-inline Vec3 particleForceWith(const SceneTopology& topology, const ForceBuffers& forces, Index i,
-                              const SpringForceAt& springForceAt) {
-  Vec3 force = topology.mass[i] * topology.settings.gravity;
-  for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r)
-    force += springForceAt(r);
+/// `force` plus the gas pressure of particle `i`'s triangles, added in the order of its incidence
+/// row.
+inline Vec3 addPressureForces(const SceneTopology& topology, const ForceBuffers& forces, Index i,
+                              Vec3 force) {
   for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
     force += forces.triangleForce[topology.triangleRefs[r]];
   return force;
 }
 
-/// particleForceWith() from the force buffers' spring forces (computeSpringForces()).
+/// Every force on particle `i`: gravity, then its springs (the force buffers' spring forces,
+/// computeSpringForces()), then its triangles' pressure, summed in the fixed order of its incidence
+/// rows (so the sum is the same for any thread count).
 inline Vec3 particleForce(const SceneTopology& topology, const ForceBuffers& forces, Index i) {
-  return particleForceWith(topology, forces, i, [&](Index r) {
+  Vec3 force = topology.mass[i] * topology.settings.gravity;
+  for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
     const Index ref = topology.springRefs[r];
-    const Vec3& force = forces.springForce[ref >> 1];
     // The `b` end gets the opposite of the `a` end's force.
-    return (ref & 1) ? Vec3(-force) : force;
-  });
+    force += (ref & 1) ? Vec3(-forces.springForce[ref >> 1]) : forces.springForce[ref >> 1];
+  }
+  return addPressureForces(topology, forces, i, force);
 }
 
 /// Gravity and gas pressure on particle `i`, without its springs: what the XPBD integrator applies
 /// as forces, its springs being constraints. Same fixed order as particleForce().
 inline Vec3 gravityAndPressureForce(const SceneTopology& topology, const ForceBuffers& forces,
                                     Index i) {
-  Vec3 force = topology.mass[i] * topology.settings.gravity;
-  for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
-    force += forces.triangleForce[topology.triangleRefs[r]];
-  return force;
+  return addPressureForces(topology, forces, i, topology.mass[i] * topology.settings.gravity);
 }
 
 /// The smallest volume the pressure law is evaluated at, as a fraction of the rest volume: keeps

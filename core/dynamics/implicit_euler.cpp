@@ -15,7 +15,6 @@
 namespace softbake {
 
 namespace {
-constexpr std::size_t kSpringGrain = 4096;
 constexpr std::size_t kParticleGrain = 2048;
 /// Particles per chunk of the fused CG passes: the chunks, not the threads, fix the summation
 /// order; small enough that two threads share the work of a 5 000-particle scene evenly.
@@ -37,8 +36,10 @@ double dot(const Vec3& a, const Vec3& b) {
 
 ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
     : matrix_(topology),
-      slotVelocity_(matrix_.slotCount(), Vec3::Zero()),
-      slotForce_(matrix_.slotCount(), Vec3::Zero()),
+      velocityTermX_(matrix_.slotCount(), 0),
+      velocityTermY_(matrix_.slotCount(), 0),
+      velocityTermZ_(matrix_.slotCount(), 0),
+      springForce_(topology.particleCount(), Vec3::Zero()),
       rhs_(topology.particleCount(), Vec3::Zero()),
       inverseDiagonal_(topology.particleCount(), Mat3::Zero()),
       deltaV_(matrix_.paddedSize(), Vec3::Zero()),
@@ -114,75 +115,41 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
 
 void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                              const SimulationState& state) {
-  // Per spring: its force, its block S and h²·K_s·(v_b − v_a), each into the slot of its `a` end
-  // and the opposite into that of its `b` end: each particle's row then reads its own slots, in
-  // order, instead of gathering by spring.
-  const Spring* springs = topology.springs.data();
-  const Vec3* x = state.position.data();
-  const Vec3* v = state.velocity.data();
-  Vec3* slotVelocity = slotVelocity_.data();
-  Vec3* slotForce = slotForce_.data();
-  SlicedSpringMatrix& matrix = matrix_;
-  const Scalar h = dt, h2 = dt * dt;
+  // The springs' forces, blocks and h²·K·v₀ terms, and each particle's diagonal block, in one
+  // pass over the matrix's slices (SlicedSpringMatrix::assemble()); then per particle the gas
+  // pressure, b = h·f₀ + h²·K·v₀ and the block-Jacobi preconditioner.
+  const SlicedSpringMatrix::AssemblyInput input{state.position.data(), state.velocity.data(),
+                                                topology.settings.gravity, dt};
+  const SlicedSpringMatrix::AssemblyOutput output{
+      springForce_.data(), inverseDiagonal_.data()->data(), velocityTermX_.data(),
+      velocityTermY_.data(), velocityTermZ_.data()};
+  static_assert(sizeof(Mat3) == 9 * sizeof(Scalar), "a block is its nine entries, column-major");
+  const std::size_t n = topology.particleCount();
+  constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
+  const Scalar h = dt;
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, topology.springs.size(), kSpringGrain),
-      [=, &matrix](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t s = range.begin(); s != range.end(); ++s) {
-          const Spring& spring = springs[s];
-          const Vec3 d = x[spring.b] - x[spring.a];
-          const Scalar length = d.norm();
-          // As computeSpringForces() has it, NaN included.
-          const Vec3 force =
-              length <= Scalar(0) ? Vec3(Vec3::Zero()) : springForceOnA(spring, d, length, v);
-          SpringBlock block;
-          Vec3 velocityTerm = Vec3::Zero();
-          if (length > Scalar(0)) {
-            // ∂f_a/∂x_b = k·(d̂d̂ᵀ + t·(I − d̂d̂ᵀ)) = k·((1 − t)·d̂d̂ᵀ + t·I), with the transverse
-            // factor t = 1 − L/l clamped at 0.
-            const Scalar transverse = std::max(Scalar(0), Scalar(1) - spring.restLength / length);
-            SpringBlock stiffness{d / length, spring.stiffness * (1 - transverse),
-                                  spring.stiffness * transverse};
-            velocityTerm = h2 * stiffness.times(v[spring.b] - v[spring.a]);
-            block = {stiffness.axis, h * spring.damping + h2 * stiffness.along,
-                     h2 * stiffness.isotropic};
+      tbb::blocked_range<std::size_t>(0, (n + kLanes - 1) / kLanes, kParticleGrain / kLanes),
+      [&](const tbb::blocked_range<std::size_t>& slices) {
+        const std::size_t begin = slices.begin() * kLanes;
+        const std::size_t end = std::min(n, slices.end() * kLanes);
+        matrix_.assemble(input, output, begin, end);
+        for (std::size_t i = begin; i < end; ++i) {
+          if (topology.inverseMass[i] == 0) {
+            rhs_[i].setZero();
+            inverseDiagonal_[i].setZero();
+            continue;
           }
-          matrix.setSpringBlock(s, block.axis, block.along, block.isotropic);
-          if (const std::size_t at = matrix.slotAtA(s); at != SlicedSpringMatrix::kNoSlot) {
-            slotForce[at] = force;
-            slotVelocity[at] = velocityTerm;
+          Vec3 b = h * addPressureForces(topology, forces, Index(i), springForce_[i]);
+          const Index rowLength = topology.springRowStart[i + 1] - topology.springRowStart[i];
+          for (Index k = 0; k < rowLength; ++k) {
+            const std::size_t at = matrix_.slot(Index(i), k);
+            b += Vec3(velocityTermX_[at], velocityTermY_[at], velocityTermZ_[at]);
           }
-          if (const std::size_t at = matrix.slotAtB(s); at != SlicedSpringMatrix::kNoSlot) {
-            slotForce[at] = -force;
-            slotVelocity[at] = -velocityTerm;
-          }
+          rhs_[i] = b;
+          const Mat3 diagonal = inverseDiagonal_[i];
+          inverseDiagonal_[i] = diagonal.inverse();
         }
       });
-
-  // Per particle: b = h·f₀ + h²·K·v₀, and the block-Jacobi preconditioner.
-  const Scalar* mass = topology.mass.data();
-  const Scalar* inverseMass = topology.inverseMass.data();
-  forEachParticle(topology.particleCount(), [&](Index i) {
-    if (inverseMass[i] == 0) {
-      rhs_[i].setZero();
-      inverseDiagonal_[i].setZero();
-      return;
-    }
-    const Index rowStart = topology.springRowStart[i];
-    const Index rowLength = topology.springRowStart[i + 1] - rowStart;
-    Vec3 b = h * particleForceWith(topology, forces, i, [&](Index r) {
-               return slotForce_[matrix_.slot(i, r - rowStart)];
-             });
-    Mat3 diagonal = Mat3::Identity() * mass[i];
-    for (Index k = 0; k < rowLength; ++k) {
-      const std::size_t at = matrix_.slot(i, k);
-      b += slotVelocity_[at];
-      const Vec3 axis = matrix_.axis(at);
-      diagonal += matrix_.along(at) * axis * axis.transpose();
-      diagonal.diagonal().array() += matrix_.isotropic(at);
-    }
-    rhs_[i] = b;
-    inverseDiagonal_[i] = diagonal.inverse();
-  });
 }
 
 template <class Chunk>

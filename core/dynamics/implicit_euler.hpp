@@ -20,8 +20,10 @@
 ///
 /// A block is stored as S = α·d̂d̂ᵀ + β·I (α = h·c + h²·k·L/l, β = h²·k·max(0, 1 − L/l)): five
 /// numbers instead of nine, and fewer operations in the product, which is laid out for SIMD
-/// (core/dynamics/sliced_spring_matrix.hpp): each step copies the blocks into it, so the product
-/// reads memory in order and no Spring. Each CG iteration is three parallel passes: the product
+/// (core/dynamics/sliced_spring_matrix.hpp). Each step assembles the blocks in that layout, each
+/// particle's springs from its own end in the lanes of its slice, together with its forces and its
+/// diagonal block: one pass that scatters nothing, so the product reads memory in order and no
+/// Spring. Each CG iteration is three parallel passes: the product
 /// with its curvature dot, the update of Δv and the residual with both residual dots, and the new
 /// search direction. CG is preconditioned by the inverse 3×3 diagonal blocks.
 ///
@@ -111,13 +113,6 @@ class ImplicitEuler {
   void releaseHolds();
 
  private:
-  /// S of one spring: α·d̂d̂ᵀ + β·I.
-  struct SpringBlock {
-    Vec3 axis = Vec3::Zero();
-    Scalar along = 0, isotropic = 0;
-    Vec3 times(const Vec3& x) const { return along * axis.dot(x) * axis + isotropic * x; }
-  };
-
   void assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                 const SimulationState& state);
   /// product = (M + Σ S)·direction with pinned rows zeroed; returns direction·product.
@@ -138,11 +133,11 @@ class ImplicitEuler {
 
   std::vector<Index> freeBodies_;  ///< bodies without pinned particles
   SlicedSpringMatrix matrix_;      ///< M + Σ S, for the product
-  /// Per slot of matrix_, its spring's share of h²·K·v₀ in that row: h²·K_s·(v_b − v_a) at `a`.
-  std::vector<Vec3> slotVelocity_;
-  /// Per slot, its spring's force on that row's particle (f on `a`, −f on `b`), at the step's
-  /// start.
-  std::vector<Vec3> slotForce_;
+  /// Per slot of matrix_, its spring's share of h²·K·v₀ in that row, h²·K_s·(v_other − v_i), one
+  /// array per coordinate.
+  std::vector<Scalar> velocityTermX_, velocityTermY_, velocityTermZ_;
+  /// Per particle: gravity plus its springs' forces at the step's start (pressure is added after).
+  std::vector<Vec3> springForce_;
   std::vector<Vec3> rhs_;  ///< b, per particle
   /// Block-Jacobi preconditioner: the inverse of each particle's 3×3 diagonal block of M + Σ S.
   /// A third fewer iterations than the scalar diagonal, since a block holds the springs' axes.

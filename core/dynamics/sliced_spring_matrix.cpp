@@ -1,6 +1,7 @@
 #include "core/dynamics/sliced_spring_matrix.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace softbake {
@@ -26,14 +27,27 @@ SlicedSpringMatrix::SlicedSpringMatrix(const SceneTopology& topology) {
     numbers->assign(slots, 0);
   laneMass_.assign(slices * kLanes, 0);
   springSlot_.assign(2 * topology.springs.size(), kNoSlot);
+  other_.resize(slots);  // a padding slot joins its particle to itself (the last one, past the end)
+  for (std::size_t slice = 0; slice < slices; ++slice)
+    for (std::size_t e = std::size_t(sliceStart_[slice]) * kLanes;
+         e < std::size_t(sliceStart_[slice + 1]) * kLanes; ++e)
+      other_[e] = Index(std::min<std::size_t>(slice * kLanes + e % kLanes, n - 1));
+  for (std::vector<Scalar>* numbers : {&restLength_, &stiffness_, &damping_, &used_})
+    numbers->assign(slots, 0);
   for (Index i = 0; i < n; ++i) {
     laneMass_[i] = topology.mass[i];
     for (Index k = 0; k < rowLength(i); ++k) {
       const Index ref = topology.springRefs[topology.springRowStart[i] + k];
       const Spring& spring = topology.springs[ref >> 1];
       const Index other = (ref & 1) ? spring.a : spring.b;
-      if (topology.inverseMass[other] != 0) neighbour_[slot(i, k)] = other;
-      springSlot_[2 * (ref >> 1) + (ref & 1)] = slot(i, k);
+      const std::size_t at = slot(i, k);
+      if (topology.inverseMass[other] != 0) neighbour_[at] = other;
+      springSlot_[2 * (ref >> 1) + (ref & 1)] = at;
+      other_[at] = other;
+      restLength_[at] = spring.restLength;
+      stiffness_[at] = spring.stiffness;
+      damping_[at] = spring.damping;
+      used_[at] = 1;
     }
   }
   useAvx2(true);
@@ -119,7 +133,140 @@ struct SlicedSpringMatrixKernel {
                                  const Scalar* inverseMass, std::size_t begin, std::size_t end) {
     return multiply(matrix, x, product, inverseMass, begin, end);
   }
+
+  /// Lane-wise square root. The file is compiled with -fno-math-errno (core/CMakeLists.txt), so
+  /// this loop becomes one square-root instruction per register of the caller's instruction set.
+  template <class Lanes>
+  [[gnu::always_inline]] static inline void takeSquareRoot(Lanes& value) {
+    for (std::size_t l = 0; l < SlicedSpringMatrix::kLanes; ++l) value[l] = std::sqrt(value[l]);
+  }
+
+  /// The assembly over [begin, end): the spring loop and the particle loop of a step in one pass
+  /// over the slices. Every operation is the one of the scalar formulas (springForceOnA(), the
+  /// block S, Eigen's 3-term dot x₀y₀ + (x₁y₁ + x₂y₂)), lane by lane, so each particle's numbers
+  /// are those of its row walked alone.
+  [[gnu::always_inline]] static inline void assemble(SlicedSpringMatrix& matrix,
+                                                     const SlicedSpringMatrix::AssemblyInput& in,
+                                                     const SlicedSpringMatrix::AssemblyOutput& out,
+                                                     std::size_t begin, std::size_t end) {
+    constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
+    using Lanes = Scalar __attribute__((vector_size(kLanes * sizeof(Scalar))));
+    const auto load = [](Lanes& lanes, const Scalar* from) {
+      std::memcpy(&lanes, from, sizeof lanes);
+    };
+    const auto store = [](Scalar* to, const Lanes& lanes) {
+      std::memcpy(to, &lanes, sizeof lanes);
+    };
+    const Scalar* positions = in.position->data();
+    const Scalar* velocities = in.velocity->data();
+    const Index* other = matrix.other_.data();
+    const Scalar h = in.timeStep, h2 = h * h;
+    const Lanes zero{};
+    for (std::size_t first = begin; first < end; first += kLanes) {
+      Lanes x{}, y{}, z{}, vx{}, vy{}, vz{};
+      for (std::size_t l = 0; l < kLanes; ++l) {  // lanes past the end repeat the last particle
+        const std::size_t i = std::min(first + l, end - 1);
+        x[l] = positions[3 * i], y[l] = positions[3 * i + 1], z[l] = positions[3 * i + 2];
+        vx[l] = velocities[3 * i], vy[l] = velocities[3 * i + 1], vz[l] = velocities[3 * i + 2];
+      }
+      Lanes mass;
+      load(mass, &matrix.laneMass_[first]);
+      Lanes fx = mass * in.gravity.x(), fy = mass * in.gravity.y(), fz = mass * in.gravity.z();
+      // m·I, entry by entry as Eigen's Identity() * m gives it.
+      Lanes d00 = mass, d11 = mass, d22 = mass;
+      Lanes d01 = mass * Scalar(0), d02 = d01, d10 = d01, d12 = d01, d20 = d01, d21 = d01;
+      const std::size_t slice = first / kLanes;
+      for (std::size_t e = std::size_t(matrix.sliceStart_[slice]) * kLanes;
+           e < std::size_t(matrix.sliceStart_[slice + 1]) * kLanes; e += kLanes) {
+        Lanes ox{}, oy{}, oz{}, ovx{}, ovy{}, ovz{};
+        for (std::size_t l = 0; l < kLanes; ++l) {
+          const std::size_t j = other[e + l];
+          ox[l] = positions[3 * j], oy[l] = positions[3 * j + 1], oz[l] = positions[3 * j + 2];
+          ovx[l] = velocities[3 * j], ovy[l] = velocities[3 * j + 1];
+          ovz[l] = velocities[3 * j + 2];
+        }
+        Lanes restLength, stiffness, damping, used;
+        load(restLength, &matrix.restLength_[e]), load(stiffness, &matrix.stiffness_[e]);
+        load(damping, &matrix.damping_[e]), load(used, &matrix.used_[e]);
+        const auto inRow = used != zero;
+        // springForceOnA() from this end: d = x_other − x_i.
+        const Lanes dx = ox - x, dy = oy - y, dz = oz - z;
+        Lanes length = dx * dx + (dy * dy + dz * dz);
+        takeSquareRoot(length);
+        const auto stretched = length > zero;
+        Lanes ax = dx / length, ay = dy / length, az = dz / length;
+        const Lanes dvx = ovx - vx, dvy = ovy - vy, dvz = ovz - vz;
+        const Lanes axial =
+            stiffness * (length - restLength) + damping * (dvx * ax + (dvy * ay + dvz * az));
+        const auto withForce = inRow && !(length <= zero);
+        fx = withForce ? fx + axial * ax : (inRow ? fx + zero : fx);
+        fy = withForce ? fy + axial * ay : (inRow ? fy + zero : fy);
+        fz = withForce ? fz + axial * az : (inRow ? fz + zero : fz);
+        // The block, with the transverse factor t = max(0, 1 − L/l) as std::max has it.
+        const Lanes shortfall = Scalar(1) - restLength / length;
+        const Lanes transverse = zero < shortfall ? shortfall : zero;
+        const Lanes alongStiffness = stiffness * (Scalar(1) - transverse);
+        const Lanes isotropicStiffness = stiffness * transverse;
+        const Lanes axialVelocity = alongStiffness * (ax * dvx + (ay * dvy + az * dvz));
+        Lanes termX = h2 * (axialVelocity * ax + isotropicStiffness * dvx);
+        Lanes termY = h2 * (axialVelocity * ay + isotropicStiffness * dvy);
+        Lanes termZ = h2 * (axialVelocity * az + isotropicStiffness * dvz);
+        Lanes along = h * damping + h2 * alongStiffness;
+        Lanes isotropic = h2 * isotropicStiffness;
+        ax = stretched ? ax : zero, ay = stretched ? ay : zero, az = stretched ? az : zero;
+        along = stretched ? along : zero, isotropic = stretched ? isotropic : zero;
+        termX = stretched ? termX : zero, termY = stretched ? termY : zero;
+        termZ = stretched ? termZ : zero;
+        store(&matrix.axisX_[e], ax), store(&matrix.axisY_[e], ay), store(&matrix.axisZ_[e], az);
+        store(&matrix.along_[e], along), store(&matrix.isotropic_[e], isotropic);
+        store(&out.velocityTermX[e], termX), store(&out.velocityTermY[e], termY);
+        store(&out.velocityTermZ[e], termZ);
+        // diagonal += α·d̂d̂ᵀ, entry (r, c) = (α·d̂_r)·d̂_c as Eigen's outer product has it; then
+        // β on the diagonal.
+        const Lanes alongX = along * ax, alongY = along * ay, alongZ = along * az;
+        d00 = inRow ? d00 + alongX * ax : d00, d01 = inRow ? d01 + alongX * ay : d01;
+        d02 = inRow ? d02 + alongX * az : d02, d10 = inRow ? d10 + alongY * ax : d10;
+        d11 = inRow ? d11 + alongY * ay : d11, d12 = inRow ? d12 + alongY * az : d12;
+        d20 = inRow ? d20 + alongZ * ax : d20, d21 = inRow ? d21 + alongZ * ay : d21;
+        d22 = inRow ? d22 + alongZ * az : d22;
+        d00 = inRow ? d00 + isotropic : d00, d11 = inRow ? d11 + isotropic : d11;
+        d22 = inRow ? d22 + isotropic : d22;
+      }
+      for (std::size_t l = 0; l < kLanes && first + l < end; ++l) {
+        const std::size_t i = first + l;
+        out.force[i] = Vec3(fx[l], fy[l], fz[l]);
+        Scalar* diagonal = out.diagonal + 9 * i;  // column-major
+        diagonal[0] = d00[l], diagonal[1] = d10[l], diagonal[2] = d20[l];
+        diagonal[3] = d01[l], diagonal[4] = d11[l], diagonal[5] = d21[l];
+        diagonal[6] = d02[l], diagonal[7] = d12[l], diagonal[8] = d22[l];
+      }
+    }
+  }
+
+#if defined(__x86_64__)
+  [[gnu::target("avx2")]] static void assembleAvx2(SlicedSpringMatrix& matrix,
+                                                   const SlicedSpringMatrix::AssemblyInput& in,
+                                                   const SlicedSpringMatrix::AssemblyOutput& out,
+                                                   std::size_t begin, std::size_t end) {
+    assemble(matrix, in, out, begin, end);
+  }
+#endif
+  static void assembleBaseline(SlicedSpringMatrix& matrix,
+                               const SlicedSpringMatrix::AssemblyInput& in,
+                               const SlicedSpringMatrix::AssemblyOutput& out, std::size_t begin,
+                               std::size_t end) {
+    assemble(matrix, in, out, begin, end);
+  }
 };
+
+void SlicedSpringMatrix::assemble(const AssemblyInput& input, const AssemblyOutput& output,
+                                  std::size_t begin, std::size_t end) {
+  if (begin >= end) return;
+#if defined(__x86_64__)
+  if (avx2_) return SlicedSpringMatrixKernel::assembleAvx2(*this, input, output, begin, end);
+#endif
+  SlicedSpringMatrixKernel::assembleBaseline(*this, input, output, begin, end);
+}
 
 double SlicedSpringMatrix::multiply(const Vec3* x, Vec3* product, const Scalar* inverseMass,
                                     std::size_t begin, std::size_t end) const {

@@ -18,9 +18,17 @@
 /// read an entry past the particles that the caller keeps at zero (a pinned Δv is zero: the
 /// constraint filter), and a padding slot's block is zero as well.
 ///
-/// Where the processor has AVX2, the product runs in 256-bit registers (chosen once at run time);
-/// elsewhere in SSE2's, with the same result. No FMA is used: a fused multiply-add rounds once
-/// instead of twice and would change the result from one processor to the next.
+/// The same layout assembles the blocks each step (assemble()): a slot computes its spring from its
+/// own end, so the lanes write their slots in order, and each particle's force, diagonal block and
+/// velocity terms are summed in its lanes, in row order, with nothing scattered. The two ends of a
+/// spring compute it twice, from opposite sides; the results are exact negatives of each other
+/// (d, v_b − v_a and d̂ change sign, |d| and d̂·d do not), and the product and the diagonal use d̂
+/// twice, so either side's block is the same to the bit.
+///
+/// Where the processor has AVX2, the product and the assembly run in 256-bit registers (chosen
+/// once at run time); elsewhere in SSE2's, with the same result. No FMA is used: a fused
+/// multiply-add rounds once instead of twice and would change the result from one processor to
+/// the next.
 
 #include <cstddef>
 #include <vector>
@@ -74,6 +82,33 @@ class SlicedSpringMatrix {
   bool usesAvx2() const { return avx2_; }
   void useAvx2(bool on);
 
+  /// The state a step's assembly reads: positions and velocities of every particle at its start.
+  struct AssemblyInput {
+    const Vec3* position;
+    const Vec3* velocity;
+    Vec3 gravity;
+    Scalar timeStep;  ///< h
+  };
+  /// What assemble() writes for each particle of its range.
+  struct AssemblyOutput {
+    /// Its mass times gravity, then plus each spring's force on it (from its end, with damping),
+    /// in the order of its incidence row: particleForce()'s sum without the pressure.
+    Vec3* force;
+    /// Nine per particle, column-major: m·I + Σ S over its springs, in row order.
+    Scalar* diagonal;
+    /// Three per slot, one array each: h²·K_s·(v_other − v_i) of the slot's spring.
+    Scalar* velocityTermX;
+    Scalar* velocityTermY;
+    Scalar* velocityTermZ;
+  };
+  /// Sets the block S = (h·c + h²·k·(1 − t))·d̂d̂ᵀ + h²·k·t·I (t = max(0, 1 − L/|d|)) of every slot
+  /// of the particles in [begin, end) from the state, and writes their outputs. A spring of zero
+  /// or non-finite length has a zero block (and, like computeSpringForces(), a zero force at zero
+  /// length). `begin` is a multiple of kLanes. Outputs of pinned particles are written but mean
+  /// nothing: their rows are empty.
+  void assemble(const AssemblyInput& input, const AssemblyOutput& output, std::size_t begin,
+                std::size_t end);
+
   /// product[i] = (A·x)_i for the particles in [begin, end), zero where `inverseMass` is zero;
   /// returns Σ x_i·(A·x)_i over them in double, summed in particle order. `begin` is a multiple of
   /// kLanes; x has paddedSize() entries.
@@ -87,6 +122,11 @@ class SlicedSpringMatrix {
   std::vector<Index> neighbour_;   ///< per slot, the other end (the zero entry if pinned or none)
   std::vector<std::size_t> springSlot_;  ///< per spring, its slots at ends a and b
   std::vector<Scalar> axisX_, axisY_, axisZ_, along_, isotropic_;  ///< per slot, its block
+  /// Per slot, its spring as seen from the row's particle, for assemble(): the other end (pinned
+  /// or not; the particle itself in a padding slot), the rest length, stiffness and damping, and
+  /// 1 where the slot holds a spring, 0 where it is padding.
+  std::vector<Index> other_;
+  std::vector<Scalar> restLength_, stiffness_, damping_, used_;
   std::vector<Scalar> laneMass_;  ///< the masses, padded with zeros to whole slices
   bool avx2_ = false;             ///< the processor runs AVX2
 };

@@ -135,5 +135,149 @@ TEST_F(SlicedSpringMatrixTest, AvxAndSseRegistersGiveTheSameBytes) {
   if (!hadAvx2) std::puts("note: this processor has no AVX2; both runs used SSE2");
 }
 
+/// What SlicedSpringMatrix::assemble() writes, kept per particle and per slot.
+struct Assembled {
+  explicit Assembled(const SlicedSpringMatrix& matrix, std::size_t n)
+      : force(n, Vec3::Constant(7)),
+        diagonal(9 * n, 7),
+        termX(matrix.slotCount(), 7),
+        termY(matrix.slotCount(), 7),
+        termZ(matrix.slotCount(), 7) {}
+  SlicedSpringMatrix::AssemblyOutput output() {
+    return {force.data(), diagonal.data(), termX.data(), termY.data(), termZ.data()};
+  }
+  std::vector<Vec3> force;
+  std::vector<Scalar> diagonal, termX, termY, termZ;
+};
+
+class SpringAssemblyTest : public SlicedSpringMatrixTest {
+ protected:
+  void SetUp() override {
+    SlicedSpringMatrixTest::SetUp();
+    std::mt19937 random(11);
+    std::uniform_real_distribution<double> uniform(-1, 1);
+    velocity.resize(topology.particleCount());
+    for (Vec3& v : velocity)
+      v = Vec3(Scalar(uniform(random)), Scalar(uniform(random)), Scalar(uniform(random)));
+    // Spring 5 of zero length: no force and a zero block, as computeSpringForces() has it.
+    x[topology.springs[5].b] = x[topology.springs[5].a];
+    x.resize(topology.particleCount());
+  }
+  SlicedSpringMatrix::AssemblyInput input() const {
+    return {x.data(), velocity.data(), Vec3(0, Scalar(-9.81), 0), kTimeStep};
+  }
+  static constexpr Scalar kTimeStep = Scalar(1.0 / 96);
+  std::vector<Vec3> velocity;
+};
+
+TEST_F(SpringAssemblyTest, EachRowHoldsItsSpringsAsTheirOwnFormulasGiveThem) {
+  // The reference walks the springs once each, in double, and adds each one's share to both ends.
+  const std::size_t n = topology.particleCount();
+  SlicedSpringMatrix matrix(topology);
+  Assembled out(matrix, n);
+  matrix.assemble(input(), out.output(), 0, n);
+
+  const double h = kTimeStep, h2 = h * h;
+  std::vector<Vec3d> force(n), term(matrix.slotCount(), Vec3d::Zero());
+  std::vector<Eigen::Matrix3d> diagonal(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    force[i] = double(topology.mass[i]) * Vec3d(0, -9.81, 0);
+    diagonal[i] = double(topology.mass[i]) * Eigen::Matrix3d::Identity();
+  }
+  for (std::size_t s = 0; s < topology.springs.size(); ++s) {
+    const Spring& spring = topology.springs[s];
+    const Vec3d d = (x[spring.b] - x[spring.a]).cast<double>();
+    const Vec3d dv = (velocity[spring.b] - velocity[spring.a]).cast<double>();
+    const double length = d.norm();
+    if (length == 0) continue;
+    const Vec3d axis = d / length;
+    const Vec3d f =
+        (spring.stiffness * (length - spring.restLength) + spring.damping * dv.dot(axis)) * axis;
+    const double transverse = std::max(0.0, 1 - spring.restLength / length);
+    const Eigen::Matrix3d stiffness =
+        spring.stiffness *
+        ((1 - transverse) * axis * axis.transpose() + transverse * Eigen::Matrix3d::Identity());
+    const Eigen::Matrix3d block = h * spring.damping * axis * axis.transpose() + h2 * stiffness;
+    force[spring.a] += f, force[spring.b] -= f;
+    diagonal[spring.a] += block, diagonal[spring.b] += block;
+    if (matrix.slotAtA(s) != SlicedSpringMatrix::kNoSlot)
+      term[matrix.slotAtA(s)] = h2 * stiffness * dv;
+    if (matrix.slotAtB(s) != SlicedSpringMatrix::kNoSlot)
+      term[matrix.slotAtB(s)] = -h2 * stiffness * dv;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (topology.inverseMass[i] == 0) continue;  // an empty row: its outputs mean nothing
+    EXPECT_LT((out.force[i].cast<double>() - force[i]).norm(), 1e-4 * (1 + force[i].norm()))
+        << "particle " << i;
+    const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3>> got(&out.diagonal[9 * i]);
+    EXPECT_LT((got.cast<double>() - diagonal[i]).norm(), 1e-5 * diagonal[i].norm())
+        << "particle " << i;
+    for (Index r = topology.springRowStart[i]; r < topology.springRowStart[i + 1]; ++r) {
+      const std::size_t at = matrix.slot(Index(i), r - topology.springRowStart[i]);
+      const Vec3d gotTerm(out.termX[at], out.termY[at], out.termZ[at]);
+      EXPECT_LT((gotTerm - term[at]).norm(), 1e-5 * (1e-3 + term[at].norm())) << "slot " << at;
+    }
+  }
+  const Spring& collapsed = topology.springs[5];
+  for (const std::size_t at : {matrix.slotAtA(5), matrix.slotAtB(5)})
+    if (at != SlicedSpringMatrix::kNoSlot) {
+      EXPECT_EQ(matrix.along(at), 0) << "spring " << collapsed.a << "-" << collapsed.b;
+      EXPECT_EQ(matrix.isotropic(at), 0);
+    }
+
+  // The blocks it set are the product's: A·x against the reference's blocks, spring by spring.
+  std::vector<Vec3> probe(matrix.paddedSize(), Vec3::Zero()), product(n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (topology.inverseMass[i] != 0) probe[i] = Vec3(Scalar(i % 3), 1, Scalar(i % 5) - 2);
+  matrix.multiply(probe.data(), product.data(), topology.inverseMass.data(), 0, n);
+  std::vector<Vec3d> expected(n);
+  for (std::size_t i = 0; i < n; ++i)
+    expected[i] = double(topology.mass[i]) * probe[i].cast<double>();
+  for (std::size_t s = 0; s < topology.springs.size(); ++s) {
+    const Spring& spring = topology.springs[s];
+    const Vec3d d = (x[spring.b] - x[spring.a]).cast<double>();
+    const double length = d.norm();
+    if (length == 0) continue;
+    const Vec3d axis = d / length;
+    const double transverse = std::max(0.0, 1 - spring.restLength / length);
+    const Eigen::Matrix3d block =
+        (h * spring.damping + h2 * spring.stiffness * (1 - transverse)) * axis * axis.transpose() +
+        h2 * spring.stiffness * transverse * Eigen::Matrix3d::Identity();
+    const Vec3d stretch = (probe[spring.a] - probe[spring.b]).cast<double>();
+    expected[spring.a] += block * stretch, expected[spring.b] -= block * stretch;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (topology.inverseMass[i] == 0) continue;
+    EXPECT_LT((product[i].cast<double>() - expected[i]).norm(), 1e-5 * (1 + expected[i].norm()))
+        << "particle " << i;
+  }
+}
+
+TEST_F(SpringAssemblyTest, IsTheSameBytesInAvxAndSseRegistersAndForAnyRangeOfWholeSlices) {
+  const std::size_t n = topology.particleCount();
+  SlicedSpringMatrix whole(topology), pieces(topology), narrow(topology);
+  Assembled a(whole, n), b(pieces, n), c(narrow, n);
+  whole.assemble(input(), a.output(), 0, n);
+  for (std::size_t begin = 0; begin < n; begin += 2 * SlicedSpringMatrix::kLanes)
+    pieces.assemble(input(), b.output(), begin,
+                    std::min(n, begin + 2 * SlicedSpringMatrix::kLanes));
+  narrow.useAvx2(false);
+  narrow.assemble(input(), c.output(), 0, n);
+  for (const Assembled* other : {&b, &c}) {
+    EXPECT_EQ(a.force, other->force);
+    EXPECT_EQ(a.diagonal, other->diagonal);
+    EXPECT_EQ(a.termX, other->termX);
+    EXPECT_EQ(a.termY, other->termY);
+    EXPECT_EQ(a.termZ, other->termZ);
+  }
+  for (std::size_t at = 0; at < whole.slotCount(); ++at) {
+    for (const SlicedSpringMatrix* other : {&pieces, &narrow}) {
+      EXPECT_EQ(whole.axis(at), other->axis(at)) << "slot " << at;
+      EXPECT_EQ(whole.along(at), other->along(at)) << "slot " << at;
+      EXPECT_EQ(whole.isotropic(at), other->isotropic(at)) << "slot " << at;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace softbake
