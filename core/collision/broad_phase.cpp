@@ -2,9 +2,9 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 
 #include "core/collision/bvh_broad_phase.hpp"
@@ -50,11 +50,24 @@ bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind) {
 
 namespace broad_phase_detail {
 
-void sortUnique(std::vector<TrianglePair>& pairs) {
-  // One 64-bit comparison instead of the defaulted <=>'s two: the same order, sorted faster.
-  auto key = [](const TrianglePair& p) { return std::uint64_t(p.first) << 32 | p.second; };
-  tbb::parallel_sort(pairs.begin(), pairs.end(),
-                     [&](const TrianglePair& a, const TrianglePair& b) { return key(a) < key(b); });
+void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scratch) {
+  // Key: first · 2³² + second. Bytes that are zero in every key are skipped: a pass over them
+  // would keep the order.
+  std::uint32_t usedBits[2] = {0, 0};
+  for (const TrianglePair& pair : pairs) usedBits[0] |= pair.second, usedBits[1] |= pair.first;
+  scratch.resize(pairs.size());
+  for (int pass = 0; pass < 8; ++pass) {
+    const int half = pass / 4, shift = 8 * (pass % 4);
+    if (((usedBits[half] >> shift) & 0xff) == 0) continue;
+    const auto digit = [&](const TrianglePair& pair) {
+      return ((half ? pair.first : pair.second) >> shift) & 0xff;
+    };
+    std::array<std::size_t, 257> start{};
+    for (const TrianglePair& pair : pairs) ++start[digit(pair) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (const TrianglePair& pair : pairs) scratch[start[digit(pair)]++] = pair;
+    pairs.swap(scratch);
+  }
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
@@ -64,11 +77,11 @@ void PairBuffers::reset(std::size_t chunks) {
   for (std::vector<TrianglePair>& buffer : buffers_) buffer.clear();
 }
 
-void PairBuffers::mergeInto(std::vector<TrianglePair>& pairs) const {
+void PairBuffers::mergeInto(std::vector<TrianglePair>& pairs) {
   pairs.clear();
   for (const std::vector<TrianglePair>& buffer : buffers_)
     pairs.insert(pairs.end(), buffer.begin(), buffer.end());
-  sortUnique(pairs);
+  sortUnique(pairs, scratch_);
 }
 
 }  // namespace broad_phase_detail
