@@ -151,7 +151,7 @@ void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
                                StageClock* clock) {
   const CollisionGeometry& geometry = topology.collision;
-  updateCollisionBoxes(topology, motion, boxes_);
+  updateCollisionBoxes(topology, motion, boxes_, topology.settings.skin, particleBoxes_);
   if (clock) clock->lap(Stage::Boxes);
   if (pairCache_)
     pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_), pairs_);

@@ -79,6 +79,7 @@ class CollisionDetector {
   void findParticleContacts(const SceneTopology& topology, const SubstepMotion& motion);
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
+  std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of
   std::unique_ptr<BroadPhase> broadPhase_;
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;

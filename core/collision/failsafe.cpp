@@ -147,7 +147,9 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
                                     std::span<const Vec3> start, std::span<const Vec3> end,
                                     bool onlyMoved) {
   const CollisionGeometry& geometry = topology.collision;
-  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(margin_));
+  // The box of each vertex's path, grown by the tolerance: the triangles' boxes are made of them,
+  // and most primitives of a candidate pair are rejected by these before any cubic is formed.
+  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(margin_), pathBoxes_);
   // The detector's cached pairs hold this stage's almost always: the response moves particles
   // far less than the cache's margin. Its own broad phase only when they do not.
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
@@ -161,18 +163,15 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
       if (v < particles && moved_[v]) return true;
     return false;
   };
-  // The box of each vertex's path, grown by the tolerance: most primitives of a candidate pair
-  // are rejected by these before any cubic is formed.
-  const Scalar grow = Scalar(margin_);
+  // Static vertices stand still: their path is a point.
   pathBoxes_.resize(particles + geometry.staticVertex.size());
-  tbb::parallel_for(tbb::blocked_range<Index>(0, Index(pathBoxes_.size()), 4096),
-                    [&](const tbb::blocked_range<Index>& range) {
-                      for (Index v = range.begin(); v != range.end(); ++v) {
-                        Box3 box(geometry.vertex(start, v));
-                        box.extend(geometry.vertex(end, v));
-                        box.min().array() -= grow;
-                        box.max().array() += grow;
-                        pathBoxes_[v] = box;
+  const Scalar grow = Scalar(margin_);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(particles, pathBoxes_.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                        const Vec3 point = geometry.vertex(start, Index(v));
+                        pathBoxes_[v] =
+                            Box3(Vec3(point.array() - grow), Vec3(point.array() + grow));
                       }
                     });
   const auto pathBox = [&](Index v) -> const Box3& { return pathBoxes_[v]; };

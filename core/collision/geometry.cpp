@@ -86,6 +86,13 @@ void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& mo
 
 void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
                           std::vector<Box3>& boxes, Scalar margin) {
+  std::vector<Box3> particleBoxes;
+  updateCollisionBoxes(topology, motion, boxes, margin, particleBoxes);
+}
+
+void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
+                          std::vector<Box3>& boxes, Scalar margin,
+                          std::vector<Box3>& particleBoxes) {
   const CollisionGeometry& geometry = topology.collision;
   if (boxes.size() != geometry.triangleVertices.size()) {
     boxes.resize(geometry.triangleVertices.size());
@@ -96,19 +103,28 @@ void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& mo
       boxes[t] = inflated(box, margin);
     }
   }
-  const Triangle* triangles = topology.triangles.data();
+  particleBoxes.resize(geometry.particleCount);
   const Vec3* x = motion.end.data();
   const Vec3* x0 = motion.start.data();
+  Box3* particleBox = particleBoxes.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleBoxes.size(), kTriangleGrain),
+                    [=](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        Box3 box(x[i]);
+                        box.extend(x0[i]);
+                        particleBox[i] = inflated(box, margin);
+                      }
+                    });
+  const Triangle* triangles = topology.triangles.data();
   Box3* out = boxes.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, geometry.softTriangleCount, kTriangleGrain),
                     [=](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                        Box3 box;
-                        for (Index v : triangles[t]) {
-                          box.extend(x[v]);
-                          box.extend(x0[v]);
-                        }
-                        out[t] = inflated(box, margin);
+                        const Triangle& corners = triangles[t];
+                        Box3 box = particleBox[corners[0]];
+                        box.extend(particleBox[corners[1]]);
+                        box.extend(particleBox[corners[2]]);
+                        out[t] = box;
                       }
                     });
 }

@@ -70,5 +70,13 @@ void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& mo
 /// static triangles' boxes keep the margin of the first call).
 void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
                           std::vector<Box3>& boxes, Scalar margin);
+/// The same, through `particleBoxes`, which receives each particle's box over its segment of the
+/// substep, inflated by `margin`: a soft triangle's box is the union of its corners' (the same box
+/// to the bit, as rounding is monotonic, so inflating commutes with min and max), and each
+/// position is read once instead of once per triangle around it. The per-step callers keep
+/// `particleBoxes`, so no step allocates.
+void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
+                          std::vector<Box3>& boxes, Scalar margin,
+                          std::vector<Box3>& particleBoxes);
 
 }  // namespace softbake
