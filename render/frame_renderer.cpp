@@ -548,23 +548,28 @@ void FrameRenderer::drawBodies() {
     glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
   }
   uniform(gl.surfaceProgram, "uSpecular", 0.25f);
-  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
-    uniform(gl.surfaceProgram, "uColor", bodyColor(options_, b));
-    glBindVertexArray(gl.bodies[b].vao);
-    glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
-  }
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b)
+    drawBody(gl.surfaceProgram, b, bodyColor(options_, b));
   if (options_.wireframe) {
     glDisable(GL_POLYGON_OFFSET_FILL);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    uniform(gl.surfaceProgram, "uFlat", 1);
-    for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
-      uniform(gl.surfaceProgram, "uColor", Vec3f(bodyColor(options_, b) * 0.3f));
-      glBindVertexArray(gl.bodies[b].vao);
-      glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
-    }
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    uniform(gl.surfaceProgram, "uFlat", 0);
+    drawBodyEdges(gl.surfaceProgram);
   }
+}
+
+void FrameRenderer::drawBody(unsigned program, std::size_t b, const Vec3f& color) {
+  const MeshBuffers& mesh = gl_->bodies[b];
+  uniform(program, "uColor", color);
+  glBindVertexArray(mesh.vao);
+  glDrawElements(GL_TRIANGLES, mesh.indexCount, GL_UNSIGNED_INT, nullptr);
+}
+
+void FrameRenderer::drawBodyEdges(unsigned program) {
+  glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+  uniform(program, "uFlat", 1);
+  for (std::size_t b = 0; b < scene_.topology->bodies.size(); ++b)
+    drawBody(program, b, Vec3f(bodyColor(options_, b) * 0.3f));
+  glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  uniform(program, "uFlat", 0);
 }
 
 /// Static meshes in grey, opaque in either view: contacts on them show through the bodies.
@@ -603,21 +608,12 @@ void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
       glEnable(GL_CULL_FACE);
     else
       glDisable(GL_CULL_FACE);
-    uniform(gl.translucentProgram, "uColor", bodyColor(options_, b));
-    glBindVertexArray(gl.bodies[b].vao);
-    glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
+    drawBody(gl.translucentProgram, b, bodyColor(options_, b));
   }
   glDisable(GL_CULL_FACE);
   if (options_.wireframe) {
-    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    uniform(gl.translucentProgram, "uFlat", 1);
     uniform(gl.translucentProgram, "uAlpha", 0.6f);
-    for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
-      uniform(gl.translucentProgram, "uColor", Vec3f(bodyColor(options_, b) * 0.3f));
-      glBindVertexArray(gl.bodies[b].vao);
-      glDrawElements(GL_TRIANGLES, gl.bodies[b].indexCount, GL_UNSIGNED_INT, nullptr);
-    }
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    drawBodyEdges(gl.translucentProgram);
   }
   glDisable(GL_BLEND);
   glDepthMask(GL_TRUE);

@@ -145,6 +145,10 @@ class FrameRenderer {
   void createContactView();
   void useSurfaceProgram(unsigned program, const Lighting& lighting);
   void drawBodies();
+  /// Body b's triangles in `color`, with `program` in use.
+  void drawBody(unsigned program, std::size_t b, const Vec3f& color);
+  /// The wireframe: every body's edges as flat lines in a dark shade of its colour.
+  void drawBodyEdges(unsigned program);
   void drawStatics();
   void drawTranslucentBodies(const Lighting& lighting);
   void drawContacts(const Frame& frame, const Lighting& lighting);
