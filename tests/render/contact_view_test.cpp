@@ -38,6 +38,15 @@ RenderOptions figureOptions() {
   return options;
 }
 
+/// The contact view of figureOptions() with the spheres off: what the spheres add, and nothing
+/// else, is the difference.
+RenderOptions optionsWithoutSpheres() {
+  RenderOptions options = figureOptions();
+  options.contacts = false;
+  options.contactsView = ContactsView::XRay;
+  return options;
+}
+
 /// Figure 4 at frame 1 (apart, no contacts) and at the first frame with ≥ 100 contacts between
 /// the two bodies. Simulated once per test program; a missing or broken example fails the tests
 /// that use it.
@@ -150,10 +159,7 @@ TEST(ContactView, Figure4sContactsChangeAtLeastAFifthOfAPercentOfItsPixels) {
   MAKE_RENDERER_OR_SKIP(withSpheres, figure.topology, figureOptions());
   ASSERT_TRUE(withSpheres->scene().xray) << "figure 4's default view";
   // The same view with the spheres off: what they add, and nothing else.
-  RenderOptions options = figureOptions();
-  options.contacts = false;
-  options.contactsView = ContactsView::XRay;
-  auto withoutSpheres = makeRenderer(figure.topology, options, whyNot_);
+  auto withoutSpheres = makeRenderer(figure.topology, optionsWithoutSpheres(), whyNot_);
   ASSERT_TRUE(withoutSpheres) << whyNot_;
   const std::size_t changed = differingPixels(withSpheres->renderRgb(figure.pressed),
                                               withoutSpheres->renderRgb(figure.pressed));
@@ -167,10 +173,7 @@ TEST(ContactView, AFrameWithoutContactsIsTheSameWithAndWithoutSpheres) {
   const Figure4& figure = figure4();
   ASSERT_TRUE(figure.apart.contacts.empty()) << "figure 4 starts with its bodies apart";
   MAKE_RENDERER_OR_SKIP(withSpheres, figure.topology, figureOptions());
-  RenderOptions options = figureOptions();
-  options.contacts = false;
-  options.contactsView = ContactsView::XRay;
-  auto withoutSpheres = makeRenderer(figure.topology, options, whyNot_);
+  auto withoutSpheres = makeRenderer(figure.topology, optionsWithoutSpheres(), whyNot_);
   ASSERT_TRUE(withoutSpheres) << whyNot_;
   EXPECT_TRUE(withSpheres->renderRgb(figure.apart) == withoutSpheres->renderRgb(figure.apart));
 }
@@ -189,10 +192,7 @@ TEST(ContactView, EveryContactInsideTheFrameCoversAPixelOfTheContactColour) {
   const Figure4& figure = figure4();
   ASSERT_GE(contactsBetweenSurfaces(figure.pressed), 100u);
   MAKE_RENDERER_OR_SKIP(renderer, figure.topology, figureOptions());
-  RenderOptions options = figureOptions();
-  options.contacts = false;
-  options.contactsView = ContactsView::XRay;
-  auto withoutSpheres = makeRenderer(figure.topology, options, whyNot_);
+  auto withoutSpheres = makeRenderer(figure.topology, optionsWithoutSpheres(), whyNot_);
   ASSERT_TRUE(withoutSpheres) << whyNot_;
   const Image with = imageOf(*renderer, figure.pressed);
   const Image without = imageOf(*withoutSpheres, figure.pressed);
