@@ -63,6 +63,26 @@ void SlicedSpringMatrix::useAvx2(bool on) {
 }
 
 struct SlicedSpringMatrixKernel {
+  /// A slice's lanes side by side in one value (the vector extensions of GCC and clang): each
+  /// operation acts lane by lane.
+  using Lanes = Scalar __attribute__((vector_size(SlicedSpringMatrix::kLanes * sizeof(Scalar))));
+
+  [[gnu::always_inline]] static inline void load(Lanes& lanes, const Scalar* from) {
+    std::memcpy(&lanes, from, sizeof lanes);
+  }
+  [[gnu::always_inline]] static inline void store(Scalar* to, const Lanes& lanes) {
+    std::memcpy(to, &lanes, sizeof lanes);
+  }
+  /// The coordinates of vector indexOf(l) of `vectors` (three scalars each) into lane l.
+  template <class IndexOf>
+  [[gnu::always_inline]] static inline void gather(const Scalar* vectors, const IndexOf& indexOf,
+                                                   Lanes& x, Lanes& y, Lanes& z) {
+    for (std::size_t l = 0; l < SlicedSpringMatrix::kLanes; ++l) {
+      const Scalar* vector = vectors + 3 * std::size_t(indexOf(l));
+      x[l] = vector[0], y[l] = vector[1], z[l] = vector[2];
+    }
+  }
+
   /// The product over [begin, end), compiled once per instruction set: inlined into each caller,
   /// it takes that caller's target.
   [[gnu::always_inline]] static inline double multiply(const SlicedSpringMatrix& matrix,
@@ -70,12 +90,6 @@ struct SlicedSpringMatrixKernel {
                                                        const Scalar* inverseMass, std::size_t begin,
                                                        std::size_t end) {
     constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
-    // A slice's lanes side by side in one value (the vector extensions of GCC and clang): each
-    // operation acts lane by lane.
-    using Lanes = Scalar __attribute__((vector_size(kLanes * sizeof(Scalar))));
-    const auto load = [](Lanes& lanes, const Scalar* from) {
-      std::memcpy(&lanes, from, sizeof lanes);
-    };
     static_assert(sizeof(Vec3) == 3 * sizeof(Scalar), "a Vec3 is its three coordinates");
     const Scalar* coordinates = x->data();  // gathered by index, three at a time
     const Index* neighbour = matrix.neighbour_.data();
@@ -83,20 +97,16 @@ struct SlicedSpringMatrixKernel {
     for (std::size_t first = begin; first < end; first += kLanes) {
       // Every lane of a gathered value is written before it is read; the braces say so to GCC.
       Lanes inX{}, inY{}, inZ{}, mass, ax, ay, az, along, isotropic;
-      for (std::size_t l = 0; l < kLanes; ++l) {
-        const Scalar* in = coordinates + 3 * (first + l);
-        inX[l] = in[0], inY[l] = in[1], inZ[l] = in[2];
-      }
+      gather(
+          coordinates, [&](std::size_t l) { return first + l; }, inX, inY, inZ);
       load(mass, &matrix.laneMass_[first]);
       Lanes sumX = mass * inX, sumY = mass * inY, sumZ = mass * inZ;
       const std::size_t slice = first / kLanes;
       for (std::size_t e = std::size_t(matrix.sliceStart_[slice]) * kLanes;
            e < std::size_t(matrix.sliceStart_[slice + 1]) * kLanes; e += kLanes) {
         Lanes otherX{}, otherY{}, otherZ{};
-        for (std::size_t l = 0; l < kLanes; ++l) {
-          const Scalar* other = coordinates + 3 * std::size_t(neighbour[e + l]);
-          otherX[l] = other[0], otherY[l] = other[1], otherZ[l] = other[2];
-        }
+        gather(
+            coordinates, [&](std::size_t l) { return neighbour[e + l]; }, otherX, otherY, otherZ);
         const Lanes dx = inX - otherX, dy = inY - otherY, dz = inZ - otherZ;
         load(ax, &matrix.axisX_[e]), load(ay, &matrix.axisY_[e]), load(az, &matrix.axisZ_[e]);
         load(along, &matrix.along_[e]), load(isotropic, &matrix.isotropic_[e]);
@@ -136,7 +146,6 @@ struct SlicedSpringMatrixKernel {
 
   /// Lane-wise square root. The file is compiled with -fno-math-errno (core/CMakeLists.txt), so
   /// this loop becomes one square-root instruction per register of the caller's instruction set.
-  template <class Lanes>
   [[gnu::always_inline]] static inline void takeSquareRoot(Lanes& value) {
     for (std::size_t l = 0; l < SlicedSpringMatrix::kLanes; ++l) value[l] = std::sqrt(value[l]);
   }
@@ -150,13 +159,6 @@ struct SlicedSpringMatrixKernel {
                                                      const SlicedSpringMatrix::AssemblyOutput& out,
                                                      std::size_t begin, std::size_t end) {
     constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
-    using Lanes = Scalar __attribute__((vector_size(kLanes * sizeof(Scalar))));
-    const auto load = [](Lanes& lanes, const Scalar* from) {
-      std::memcpy(&lanes, from, sizeof lanes);
-    };
-    const auto store = [](Scalar* to, const Lanes& lanes) {
-      std::memcpy(to, &lanes, sizeof lanes);
-    };
     const Scalar* positions = in.position->data();
     const Scalar* velocities = in.velocity->data();
     const Index* other = matrix.other_.data();
@@ -164,11 +166,10 @@ struct SlicedSpringMatrixKernel {
     const Lanes zero{};
     for (std::size_t first = begin; first < end; first += kLanes) {
       Lanes x{}, y{}, z{}, vx{}, vy{}, vz{};
-      for (std::size_t l = 0; l < kLanes; ++l) {  // lanes past the end repeat the last particle
-        const std::size_t i = std::min(first + l, end - 1);
-        x[l] = positions[3 * i], y[l] = positions[3 * i + 1], z[l] = positions[3 * i + 2];
-        vx[l] = velocities[3 * i], vy[l] = velocities[3 * i + 1], vz[l] = velocities[3 * i + 2];
-      }
+      // Lanes past the end repeat the last particle.
+      const auto particle = [&](std::size_t l) { return std::min(first + l, end - 1); };
+      gather(positions, particle, x, y, z);
+      gather(velocities, particle, vx, vy, vz);
       Lanes mass;
       load(mass, &matrix.laneMass_[first]);
       Lanes fx = mass * in.gravity.x(), fy = mass * in.gravity.y(), fz = mass * in.gravity.z();
@@ -179,12 +180,9 @@ struct SlicedSpringMatrixKernel {
       for (std::size_t e = std::size_t(matrix.sliceStart_[slice]) * kLanes;
            e < std::size_t(matrix.sliceStart_[slice + 1]) * kLanes; e += kLanes) {
         Lanes ox{}, oy{}, oz{}, ovx{}, ovy{}, ovz{};
-        for (std::size_t l = 0; l < kLanes; ++l) {
-          const std::size_t j = other[e + l];
-          ox[l] = positions[3 * j], oy[l] = positions[3 * j + 1], oz[l] = positions[3 * j + 2];
-          ovx[l] = velocities[3 * j], ovy[l] = velocities[3 * j + 1];
-          ovz[l] = velocities[3 * j + 2];
-        }
+        const auto otherEnd = [&](std::size_t l) { return other[e + l]; };
+        gather(positions, otherEnd, ox, oy, oz);
+        gather(velocities, otherEnd, ovx, ovy, ovz);
         Lanes restLength, stiffness, damping, used;
         load(restLength, &matrix.restLength_[e]), load(stiffness, &matrix.stiffness_[e]);
         load(damping, &matrix.damping_[e]), load(used, &matrix.used_[e]);
@@ -198,10 +196,11 @@ struct SlicedSpringMatrixKernel {
         const Lanes dvx = ovx - vx, dvy = ovy - vy, dvz = ovz - vz;
         const Lanes axial =
             stiffness * (length - restLength) + damping * (dvx * ax + (dvy * ay + dvz * az));
-        const auto withForce = inRow && !(length <= zero);
-        fx = withForce ? fx + axial * ax : (inRow ? fx + zero : fx);
-        fy = withForce ? fy + axial * ay : (inRow ? fy + zero : fy);
-        fz = withForce ? fz + axial * az : (inRow ? fz + zero : fz);
+        // Zero at zero length, as computeSpringForces() has it (NaN stays NaN).
+        const auto noForce = length <= zero;
+        fx = inRow ? fx + (noForce ? zero : axial * ax) : fx;
+        fy = inRow ? fy + (noForce ? zero : axial * ay) : fy;
+        fz = inRow ? fz + (noForce ? zero : axial * az) : fz;
         // The block, with the transverse factor t = max(0, 1 − L/l) as std::max has it.
         const Lanes shortfall = Scalar(1) - restLength / length;
         const Lanes transverse = zero < shortfall ? shortfall : zero;
