@@ -32,6 +32,7 @@ unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int
 #include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "render/changed_pixels.hpp"
 #include "render/gl_resources.hpp"
 #include "render/shaders.hpp"
 
@@ -43,6 +44,14 @@ namespace {
 constexpr float kBackground[3] = {0.86f, 0.87f, 0.89f};
 /// The blob shadows of this many bodies, the first ones, reach the ground shader.
 constexpr int kMaxShadows = 16;
+
+/// A body's soft shadow on the ground: a Gaussian around the point under its centre, drawn over
+/// a square of half-side 3σ.
+struct BlobShadow {
+  Vec3f center;  ///< on the ground
+  float sigma, strength;
+  float extent() const { return 3 * sigma; }
+};
 
 /// The ground: the first plane as a point, its unit normal and two axes in it.
 struct GroundPlane {
@@ -229,7 +238,13 @@ struct FrameRenderer::Gl {
   GLuint oitFbo = 0, oitAccumulation = 0, oitWeight = 0;
   GLuint oitResolveFbo = 0, oitAccumulationTexture = 0, oitWeightTexture = 0;
   int samples = 0;
+  /// The ground as every frame starts, resolved and read back once, RGB top row first: the image
+  /// outside the pixels a frame changes.
+  std::vector<std::uint8_t> groundImage;
+  Eigen::AlignedBox3f staticBounds;  ///< the static meshes, drawn every frame
+  PixelRect changed;                 ///< the pixels this frame draws, resolves and reads back
   // Per-frame scratch, kept to avoid allocating every frame.
+  std::vector<BlobShadow> shadows;
   std::vector<Vec3f> normals;
   std::vector<float> interleaved;
   std::vector<float> instances;
@@ -259,6 +274,14 @@ FrameRenderer::FrameRenderer(RenderScene scene, RenderOptions options)
   glEnable(GL_DEPTH_TEST);
   drawGround(lighting());
   glBindVertexArray(0);
+  const int w = options_.width, h = options_.height;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.groundFbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.resolveFbo);
+  glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  gl.groundImage.resize(std::size_t(w) * std::size_t(h) * 3);
+  readPixels(gl.resolveFbo, {0, 0, w, h}, gl.groundImage);
+  for (const StaticMeshCollider& collider : scene_.topology->staticMeshes)
+    for (const Vec3f& p : collider.mesh.positions) gl.staticBounds.extend(p);
   checkGl("while setting up the renderer");
 }
 
@@ -453,17 +476,30 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   }
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
+  const Lighting light = lighting();
+  ChangedPixels changed(light.viewProjection, w, h);
+  uploadBodies(frame, changed);
+  if (options_.contacts)
+    for (const Contact& c : frame.contacts)
+      changed.addBox(c.position.cast<float>() - Vec3f::Constant(scene_.contactRadius),
+                     c.position.cast<float>() + Vec3f::Constant(scene_.contactRadius));
+  if (!gl.staticBounds.isEmpty()) changed.addBox(gl.staticBounds.min(), gl.staticBounds.max());
+  gl.changed = options_.redrawWholeFrame ? PixelRect{0, 0, w, h} : changed.rect();
+  const PixelRect& r = gl.changed;
+  if (r.empty()) return readImage(frame.number);
+
+  // Every pass below touches the changed pixels only; the rest of the image is the ground.
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(r.x0, r.y0, r.width(), r.height());
   const GLuint target = gl.samples > 1 ? gl.multisampleFbo : gl.resolveFbo;
   glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.groundFbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
-  glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  blit(r, GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glBindFramebuffer(GL_FRAMEBUFFER, target);
   glViewport(0, 0, w, h);
   glDisable(GL_CULL_FACE);  // open meshes show their inside
 
-  const Lighting light = lighting();
-  const std::vector<float> shadows = uploadBodies(frame);
-  drawShadows(light, shadows);
+  drawShadows(light);
   glEnable(GL_DEPTH_TEST);
   useSurfaceProgram(gl.surfaceProgram, light);
   if (!scene_.xray) drawBodies();
@@ -487,39 +523,57 @@ FrameRenderer::Lighting FrameRenderer::lighting() const {
   return lighting;
 }
 
-/// Bodies' positions and smooth normals for this frame; returns their blob shadows (centre and
-/// radius of the first kMaxShadows bodies).
-std::vector<float> FrameRenderer::uploadBodies(const Frame& frame) {
+/// Bodies' positions and smooth normals for this frame, and the blob shadows of the first
+/// kMaxShadows bodies (into Gl::shadows); adds the pixels both can cover to `changed`.
+void FrameRenderer::uploadBodies(const Frame& frame, ChangedPixels& changed) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
-  std::vector<float> shadows;
+  gl.shadows.clear();
   const std::span<const Vec3> positions(frame.positions);
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
     computeBodyNormals(topology, positions, body, gl.normals);
     gl.interleaved.resize(std::size_t(body.particleCount) * 6);
     Vec3d sum = Vec3d::Zero();
+    Eigen::AlignedBox3f bounds;
     for (Index i = 0; i < body.particleCount; ++i) {
       const Vec3f p = positions[body.firstParticle + i].cast<float>();
       const Vec3f& n = gl.normals[i];
       std::copy_n(p.data(), 3, &gl.interleaved[std::size_t(i) * 6]);
       std::copy_n(n.data(), 3, &gl.interleaved[std::size_t(i) * 6 + 3]);
       sum += p.cast<double>();
+      bounds.extend(p);
     }
     glBindBuffer(GL_ARRAY_BUFFER, gl.bodies[b].vertices);
     glBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(gl.interleaved.size() * sizeof(float)),
                     gl.interleaved.data());
-    if (b < kMaxShadows && body.particleCount > 0) {
+    if (body.particleCount == 0) continue;
+    changed.addBox(bounds.min(), bounds.max());
+    if (b < kMaxShadows && gl.ground.indexCount > 0) {
       const Vec3f center = (sum / double(body.particleCount)).cast<float>();
       float radius = 0;
       for (Index i = 0; i < body.particleCount; ++i)
         radius = std::max(radius,
                           (positions[body.firstParticle + i].cast<float>() - center).squaredNorm());
-      shadows.insert(shadows.end(), {center.x(), center.y(), center.z(), std::sqrt(radius)});
+      addShadow(center, std::sqrt(radius), changed);
     }
   }
+}
 
-  return shadows;
+/// The blob shadow of a body with centroid `center` and `radius` (into Gl::shadows), and the
+/// pixels its square covers.
+void FrameRenderer::addShadow(const Vec3f& center, float radius, ChangedPixels& changed) {
+  const auto [point, normal, u, v] = groundPlane(*scene_.topology);
+  // A higher body casts a wider, fainter shadow.
+  const float height = std::max((center - point).dot(normal), 0.0f);
+  const float sigma = radius * 0.9f + 0.5f * std::max(height - radius, 0.0f);
+  if (!(sigma > 0)) return;
+  const BlobShadow shadow{Vec3f(center - normal * (center - point).dot(normal)), sigma,
+                          0.6f * std::clamp(radius / std::max(height, radius), 0.0f, 1.0f)};
+  gl_->shadows.push_back(shadow);
+  for (const float a : {-1.0f, 1.0f})
+    for (const float b : {-1.0f, 1.0f})
+      changed.add(shadow.center + shadow.extent() * (a * u + b * v));
 }
 
 /// Binds `program` (the opaque or the translucent surface shader) with the frame's view and
@@ -648,7 +702,8 @@ void FrameRenderer::drawContacts(const Frame& frame, const Lighting& lighting) {
                           GLsizei(count));
 }
 
-/// The contact view's translucent layers over the resolved opaque image (in resolveFbo).
+/// The contact view's translucent layers over the resolved opaque image (in resolveFbo), over the
+/// changed pixels.
 void FrameRenderer::compositeTranslucent() {
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
@@ -659,7 +714,7 @@ void FrameRenderer::compositeTranslucent() {
     for (GLenum target : {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}) {
       glReadBuffer(target);
       glDrawBuffer(target);
-      glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+      blit(gl.changed, GL_COLOR_BUFFER_BIT);
     }
     const GLenum targets[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, targets);
@@ -719,61 +774,75 @@ Eigen::Vector2f FrameRenderer::groundFade() const {
 
 /// Each body's blob shadow multiplied into the ground copied in: a square around the point under
 /// the body, before the bodies are drawn, so no depth test is needed.
-void FrameRenderer::drawShadows(const Lighting& lighting, const std::vector<float>& shadows) {
+void FrameRenderer::drawShadows(const Lighting& lighting) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
-  if (gl.ground.indexCount == 0 || shadows.empty()) return;
-  const auto [point, normal, u, v] = groundPlane(topology);
+  if (gl.ground.indexCount == 0 || gl.shadows.empty()) return;
+  const GroundPlane ground = groundPlane(topology);
   const Eigen::Vector2f fade = groundFade();
   glUseProgram(gl.shadowProgram);
   uniform(gl.shadowProgram, "uViewProjection", lighting.viewProjection);
-  uniform(gl.shadowProgram, "uAxisU", u);
-  uniform(gl.shadowProgram, "uAxisV", v);
+  uniform(gl.shadowProgram, "uAxisU", ground.u);
+  uniform(gl.shadowProgram, "uAxisV", ground.v);
   uniform(gl.shadowProgram, "uEye", scene_.camera.position);
   glUniform2f(glGetUniformLocation(gl.shadowProgram, "uFade"), fade.x(), fade.y());
   glDisable(GL_DEPTH_TEST);
   glEnable(GL_BLEND);
   glBlendFunc(GL_DST_COLOR, GL_ZERO);
   glBindVertexArray(gl.emptyVao);
-  for (std::size_t s = 0; s + 4 <= shadows.size(); s += 4) {
-    const Vec3f center(shadows[s], shadows[s + 1], shadows[s + 2]);
-    const float radius = shadows[s + 3];
-    // A higher body casts a wider, fainter shadow.
-    const float height = std::max((center - point).dot(normal), 0.0f);
-    const float sigma = radius * 0.9f + 0.5f * std::max(height - radius, 0.0f);
-    if (!(sigma > 0)) continue;
-    uniform(gl.shadowProgram, "uCenter", Vec3f(center - normal * (center - point).dot(normal)));
-    uniform(gl.shadowProgram, "uSigma", sigma);
-    uniform(gl.shadowProgram, "uStrength",
-            0.6f * std::clamp(radius / std::max(height, radius), 0.0f, 1.0f));
-    uniform(gl.shadowProgram, "uExtent", 3 * sigma);
+  for (const BlobShadow& shadow : gl.shadows) {
+    uniform(gl.shadowProgram, "uCenter", shadow.center);
+    uniform(gl.shadowProgram, "uSigma", shadow.sigma);
+    uniform(gl.shadowProgram, "uStrength", shadow.strength);
+    uniform(gl.shadowProgram, "uExtent", shadow.extent());
     glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
   }
   glDisable(GL_BLEND);
 }
 
-/// Resolves the multisampled image and reads it back, top row first.
+/// The ground image with the changed pixels resolved, composited and read back over it, top row
+/// first.
 std::vector<std::uint8_t> FrameRenderer::readImage(int frameNumber) {
   Gl& gl = *gl_;
-  const int w = options_.width, h = options_.height;
+  std::vector<std::uint8_t> image = gl.groundImage;
+  if (gl.changed.empty()) return image;
   if (gl.samples > 1) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.multisampleFbo);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl.resolveFbo);
-    glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    blit(gl.changed, GL_COLOR_BUFFER_BIT);
   }
   if (scene_.xray) compositeTranslucent();
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.resolveFbo);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  gl.pixels.resize(std::size_t(w) * std::size_t(h) * 3);
-  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, gl.pixels.data());
+  readPixels(gl.resolveFbo, gl.changed, image);
+  glDisable(GL_SCISSOR_TEST);
   checkGl(cat("while rendering frame ", frameNumber).c_str());
-
-  // OpenGL's rows start at the bottom, PNG's at the top.
-  std::vector<std::uint8_t> image(gl.pixels.size());
-  const std::size_t row = std::size_t(w) * 3;
-  for (int y = 0; y < h; ++y)
-    std::copy_n(&gl.pixels[std::size_t(h - 1 - y) * row], row, &image[std::size_t(y) * row]);
   return image;
+}
+
+PixelRect FrameRenderer::changedPixels() const {
+  return gl_->changed;
+}
+
+/// The same rectangle from the bound read framebuffer to the bound draw framebuffer.
+void FrameRenderer::blit(const PixelRect& r, unsigned mask) {
+  glBlitFramebuffer(r.x0, r.y0, r.x1, r.y1, r.x0, r.y0, r.x1, r.y1, mask, GL_NEAREST);
+}
+
+/// Reads `r` of `framebuffer`'s colour into the same pixels of `image` (RGB, the whole image's
+/// size, top row first).
+void FrameRenderer::readPixels(unsigned framebuffer, const PixelRect& r,
+                               std::vector<std::uint8_t>& image) {
+  Gl& gl = *gl_;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  const std::size_t rectRow = std::size_t(r.width()) * 3;
+  gl.pixels.resize(rectRow * std::size_t(r.height()));
+  glReadPixels(r.x0, r.y0, r.width(), r.height(), GL_RGB, GL_UNSIGNED_BYTE, gl.pixels.data());
+  // OpenGL's rows start at the bottom, PNG's at the top.
+  const std::size_t row = std::size_t(options_.width) * 3;
+  for (int y = 0; y < r.height(); ++y)
+    std::copy_n(
+        &gl.pixels[std::size_t(y) * rectRow], rectRow,
+        &image[std::size_t(options_.height - 1 - (r.y0 + y)) * row + std::size_t(r.x0) * 3]);
 }
 
 std::string encodePng(const std::vector<std::uint8_t>& rgb, int width, int height) {

@@ -22,6 +22,7 @@
 #include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "render/camera.hpp"
+#include "render/changed_pixels.hpp"
 #include "render/egl_context.hpp"
 
 namespace softbake {
@@ -67,6 +68,9 @@ struct RenderOptions {
   /// framing then covers all of it, so bodies that roll away stay in the picture. Unset: the
   /// initial state's bounds and their shadow on the ground.
   std::optional<Eigen::AlignedBox3f> shotBounds;
+  /// Draw every pixel of every frame instead of only those the frame can change
+  /// (render/changed_pixels.hpp): the same image, the reference the tests hold it to.
+  bool redrawWholeFrame = false;
   EglOptions egl;
 };
 
@@ -128,6 +132,8 @@ class FrameRenderer {
   void makeCurrent() { context_->makeCurrent(); }
 
   const RenderScene& scene() const { return scene_; }
+  /// The pixels the last frame drew; the rest of it was the ground as every frame starts.
+  PixelRect changedPixels() const;
   const RenderOptions& options() const { return options_; }
   const EglContext& context() const { return *context_; }
 
@@ -141,7 +147,8 @@ class FrameRenderer {
 
   void createMeshes();
   void createFramebuffers();
-  std::vector<float> uploadBodies(const Frame& frame);
+  void uploadBodies(const Frame& frame, ChangedPixels& changed);
+  void addShadow(const Vec3f& center, float radius, ChangedPixels& changed);
   void createContactView();
   void useSurfaceProgram(unsigned program, const Lighting& lighting);
   void drawBodies();
@@ -154,10 +161,12 @@ class FrameRenderer {
   void drawContacts(const Frame& frame, const Lighting& lighting);
   void compositeTranslucent();
   void drawGround(const Lighting& lighting);
-  void drawShadows(const Lighting& lighting, const std::vector<float>& shadows);
+  void drawShadows(const Lighting& lighting);
   Lighting lighting() const;
   Eigen::Vector2f groundFade() const;
   std::vector<std::uint8_t> readImage(int frameNumber);
+  void blit(const PixelRect& r, unsigned mask);
+  void readPixels(unsigned framebuffer, const PixelRect& r, std::vector<std::uint8_t>& image);
   RenderScene scene_;
   RenderOptions options_;
   std::unique_ptr<EglContext> context_;
