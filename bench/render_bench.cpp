@@ -53,6 +53,7 @@
 #include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"
 #include "render/frame_renderer.hpp"
+#include "render/png_encoder.hpp"
 
 namespace softbake {
 namespace {
@@ -159,6 +160,7 @@ std::string token(std::string text) {
 struct ViewRun {
   std::string name;
   std::unique_ptr<FrameRenderer> renderer;
+  PngEncoder encoder;  ///< one per sequence, as a PNG sequence has
   double setupMs = 0, firstRenderMs = 0, firstEncodeMs = 0;
   std::vector<double> renderMs, encodeMs;
   std::string png;
@@ -202,7 +204,7 @@ int runBench(const Options& options) {
       const std::vector<std::uint8_t> rgb = run.renderer->renderRgb(frame);
       const double rendered = msSince(renderStart);
       const Clock::time_point encodeStart = Clock::now();
-      run.png = encodePng(rgb, options.width, options.height);
+      run.png = run.encoder.encode(rgb, options.width, options.height);
       const double encoded = msSince(encodeStart);
       if (f == 1) {
         run.firstRenderMs = rendered;

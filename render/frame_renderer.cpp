@@ -1,30 +1,5 @@
 #include "render/frame_renderer.hpp"
 
-#include <zlib.h>
-
-#include <cstdlib>
-
-namespace {
-/// stb_image_write's own deflate took as long as rendering the frame on llvmpipe; zlib at its
-/// fastest level is several times quicker and still smaller. PNG is lossless: the pixels are the
-/// same. stb frees the result with free(), so it is malloc'ed.
-unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int /*quality*/) {
-  uLongf size = compressBound(uLong(length));
-  auto* out = static_cast<unsigned char*>(std::malloc(size));
-  if (!out) return nullptr;
-  if (compress2(out, &size, data, uLong(length), Z_BEST_SPEED) != Z_OK) {
-    std::free(out);
-    return nullptr;
-  }
-  *outLength = int(size);
-  return out;
-}
-}  // namespace
-
-#define STBIW_ZLIB_COMPRESS zlibCompress
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb/stb_image_write.h>
-
 #include <algorithm>
 #include <cmath>
 
@@ -34,6 +9,7 @@ unsigned char* zlibCompress(unsigned char* data, int length, int* outLength, int
 #include "output/atomic_file.hpp"
 #include "render/changed_pixels.hpp"
 #include "render/gl_resources.hpp"
+#include "render/png_encoder.hpp"
 #include "render/shaders.hpp"
 
 namespace softbake {
@@ -46,11 +22,18 @@ constexpr float kBackground[3] = {0.86f, 0.87f, 0.89f};
 constexpr int kMaxShadows = 16;
 
 /// A body's soft shadow on the ground: a Gaussian around the point under its centre, drawn over
-/// a square of half-side 3σ.
+/// a square that reaches as far as it can change an 8-bit channel.
 struct BlobShadow {
   Vec3f center;  ///< on the ground
   float sigma, strength;
-  float extent() const { return 3 * sigma; }
+  /// Half the square's side. The shader darkens by 1 − (1 − s·exp(−d²/σ²))^(1/2.2), about
+  /// s·exp(−d²/σ²)/2.2; beyond the distance where that is a quarter of a step of 255 it rounds
+  /// to nothing. At most 3σ (where it is 1/36 of a step at full strength), so a weak shadow,
+  /// a high body's, covers far fewer pixels than its Gaussian's 3σ. 0: no pixel changes.
+  float extent() const {
+    const float reach = std::log(strength * 255 / (2.2f * 0.25f));
+    return reach > 0 ? sigma * std::min(std::sqrt(reach), 3.0f) : 0;
+  }
 };
 
 /// The ground: the first plane as a point, its unit normal and two axes in it.
@@ -570,6 +553,7 @@ void FrameRenderer::addShadow(const Vec3f& center, float radius, ChangedPixels& 
   if (!(sigma > 0)) return;
   const BlobShadow shadow{Vec3f(center - normal * (center - point).dot(normal)), sigma,
                           0.6f * std::clamp(radius / std::max(height, radius), 0.0f, 1.0f)};
+  if (!(shadow.extent() > 0)) return;
   gl_->shadows.push_back(shadow);
   for (const float a : {-1.0f, 1.0f})
     for (const float b : {-1.0f, 1.0f})
@@ -843,16 +827,6 @@ void FrameRenderer::readPixels(unsigned framebuffer, const PixelRect& r,
     std::copy_n(
         &gl.pixels[std::size_t(y) * rectRow], rectRow,
         &image[std::size_t(options_.height - 1 - (r.y0 + y)) * row + std::size_t(r.x0) * 3]);
-}
-
-std::string encodePng(const std::vector<std::uint8_t>& rgb, int width, int height) {
-  std::string png;
-  auto append = [](void* context, void* data, int size) {
-    static_cast<std::string*>(context)->append(static_cast<const char*>(data), std::size_t(size));
-  };
-  if (!stbi_write_png_to_func(append, &png, width, height, 3, rgb.data(), width * 3))
-    throw Error(cat("renderer: PNG encoding of a ", width, "x", height, " image failed"));
-  return png;
 }
 
 std::string FrameRenderer::renderPng(const Frame& frame) {

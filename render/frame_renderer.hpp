@@ -173,7 +173,4 @@ class FrameRenderer {
   std::unique_ptr<Gl> gl_;
 };
 
-/// PNG bytes of an RGB8 image, top row first.
-std::string encodePng(const std::vector<std::uint8_t>& rgb, int width, int height);
-
 }  // namespace softbake

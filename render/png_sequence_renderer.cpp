@@ -45,7 +45,7 @@ void PngSequenceRenderer::write(const Frame& frame) {
   // The previous frame's encoding ran while this one rendered; its error, if any, surfaces here.
   collectPending();
   pending_ = std::async(std::launch::async, [this, rgb = std::move(rgb), path] {
-    const std::string png = encodePng(rgb, options_.width, options_.height);
+    const std::string png = encoder_.encode(rgb, options_.width, options_.height);
     writeFileAtomically(path, png);
     return std::uint64_t(png.size());
   });

@@ -20,6 +20,7 @@
 #include "output/frame_naming.hpp"
 #include "output/manifest.hpp"
 #include "render/frame_renderer.hpp"
+#include "render/png_encoder.hpp"
 
 namespace softbake {
 
@@ -55,6 +56,8 @@ class PngSequenceRenderer : public FrameSink {
 
   std::unique_ptr<FrameRenderer> renderer_;  ///< made by the first write(), on its thread
   std::future<std::uint64_t> pending_;       ///< the previous frame's encoding and write
+  /// Used by one encoding at a time (each waits for the one before), on its thread.
+  PngEncoder encoder_;
   std::atomic<std::uint64_t> bytes_{0};
 };
 

@@ -157,9 +157,9 @@ void main() {
 }
 )";
 
-// One body's blob shadow: a square on the ground plane around the point under the body, 3σ of its
-// Gaussian from the centre (past that the shadow changes no 8-bit value), drawn as a triangle
-// strip of four vertices without attributes.
+// One body's blob shadow: a square on the ground plane around the point under the body, as far
+// from the centre as the shadow can change an 8-bit value (BlobShadow::extent()), drawn as a
+// triangle strip of four vertices without attributes.
 const char* const kShadowVertexShader = R"(#version 330 core
 uniform mat4 uViewProjection;
 uniform vec3 uCenter;
