@@ -180,18 +180,43 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
 }
 
 double contactEdgeLength(const SceneTopology& topology) {
-  std::vector<double> lengths;
-  lengths.reserve(topology.triangles.size() * 3);
-  for (const Triangle& t : topology.triangles)
-    for (int k = 0; k < 3; ++k)
-      lengths.push_back(
-          double((topology.restPosition[t[(k + 1) % 3]] - topology.restPosition[t[k]]).norm()));
-  if (lengths.empty()) return std::numeric_limits<double>::infinity();
-  // nth_element: linear in the number of edges, so setup stays linear in the scene's size.
-  const auto nth =
-      lengths.begin() + std::ptrdiff_t(double(lengths.size() - 1) * kShortEdgeQuantile);
-  std::nth_element(lengths.begin(), nth, lengths.end());
-  return *nth;
+  // Each edge of each triangle, with a third of the triangle's area.
+  std::vector<std::pair<double, double>> edges;
+  edges.reserve(topology.triangles.size() * 3);
+  double totalArea = 0;
+  for (const Triangle& t : topology.triangles) {
+    const Vec3 a = topology.restPosition[t[0]], b = topology.restPosition[t[1]],
+               c = topology.restPosition[t[2]];
+    const double third = 0.5 * double((b - a).cross(c - a).norm()) / 3;
+    edges.insert(edges.end(), {{double((b - a).norm()), third},
+                               {double((c - b).norm()), third},
+                               {double((a - c).norm()), third}});
+    totalArea += 3 * third;
+  }
+  if (edges.empty()) return std::numeric_limits<double>::infinity();
+  if (!(totalArea > 0)) {  // every triangle degenerate: count edges alike
+    for (auto& edge : edges) edge.second = 1;
+    totalArea = double(edges.size());
+  }
+  // The shortest length whose edges and all shorter ones carry the quantile's share of the area.
+  // Each round puts the median of the range in place (nth_element, linear) and keeps the half the
+  // quantile lies in, so the whole search is linear in the number of edges and setup stays linear
+  // in the scene's size.
+  double wanted = kShortEdgeQuantile * totalArea;
+  auto lo = edges.begin(), hi = edges.end();
+  while (hi - lo > 1) {
+    const auto mid = lo + (hi - lo) / 2;
+    std::nth_element(lo, mid, hi);
+    double below = 0;
+    for (auto e = lo; e != mid; ++e) below += e->second;
+    if (below >= wanted) {
+      hi = mid;
+    } else {
+      wanted -= below;
+      lo = mid;
+    }
+  }
+  return lo->first;
 }
 
 }  // namespace softbake

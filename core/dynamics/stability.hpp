@@ -57,10 +57,13 @@ inline constexpr int kMaxAutoSubsteps = 64;
 /// (tests/core/collision_test); at a half they did not.
 inline constexpr double kContactReachFraction = 0.1;
 
-/// The contact reach uses this quantile of the rest edge lengths, not the shortest edge: the few
-/// sliver and tiny triangles of an imported CAD part or scan (a twentieth of its edges) would
-/// otherwise set the step for the whole scene. On a uniform mesh, such as an icosphere, it is
-/// within a few percent of the shortest edge.
+/// The contact reach uses this quantile of the rest edge lengths weighted by surface area, not the
+/// shortest edge: the sliver and tiny triangles of an imported CAD part, scan or character (a
+/// finely modelled eye or beak, a bevel) would otherwise set the step for the whole scene. Each
+/// triangle gives each of its edges a third of its area, and the short edge is the length below
+/// which edges carry a twentieth of the surface: many small triangles over little of the surface
+/// do not count, a finely meshed body does. On a uniform mesh, such as an icosphere, it is within
+/// a few percent of the shortest edge.
 inline constexpr double kShortEdgeQuantile = 0.05;
 
 /// "auto" substeps of the implicit and XPBD integrators, which are stable at any step, so the
@@ -106,8 +109,8 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const TrianglePair> touching, double edgeLength,
                                         ContactAccuracyScratch& scratch);
 
-/// The rest edge length that sets the contact reach: the kShortEdgeQuantile quantile of the
-/// triangles' rest edges, scene units; infinity when there is none.
+/// The rest edge length that sets the contact reach: the area-weighted kShortEdgeQuantile
+/// quantile of the triangles' rest edges, scene units; infinity when there is none.
 double contactEdgeLength(const SceneTopology& topology);
 
 }  // namespace softbake

@@ -8,6 +8,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <random>
+#include <utility>
+#include <vector>
 
 #include "core/dynamics/stability.hpp"
 #include "core/simulator.hpp"
@@ -257,6 +260,90 @@ TEST(ContactAccuracy, AFewSliverTrianglesDoNotSetTheSubsteps) {
   EXPECT_GT(uniformRun.substeps().substeps, kMinAutoSubsteps) << "the bodies close this frame";
   EXPECT_LE(sliveredRun.substeps().substeps, 2 * uniformRun.substeps().substeps);
   EXPECT_LT(sliveredRun.substeps().substeps, kMaxAutoSubsteps);
+}
+
+/// The same quantile by sorting every edge (the brute-force reference for contactEdgeLength).
+double sortedWeightedQuantile(const SceneTopology& topology) {
+  std::vector<std::pair<double, double>> edges;
+  double total = 0;
+  for (const Triangle& t : topology.triangles) {
+    const Vec3 a = topology.restPosition[t[0]], b = topology.restPosition[t[1]],
+               c = topology.restPosition[t[2]];
+    const double third = 0.5 * double((b - a).cross(c - a).norm()) / 3;
+    for (const auto& [p, q] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}})
+      edges.emplace_back(double((q - p).norm()), third);
+    total += 3 * third;
+  }
+  std::sort(edges.begin(), edges.end());
+  double carried = 0;
+  for (const auto& [length, area] : edges) {
+    carried += area;
+    if (carried >= kShortEdgeQuantile * total) return length;
+  }
+  return edges.back().first;
+}
+
+/// One body of `mesh`, at rest, in a scene of its own.
+SceneTopology bodyOf(TriangleMesh mesh) {
+  SceneSetup setup;
+  BodySetup body;
+  body.mesh = std::move(mesh);
+  body.material = *findMaterialPreset("rubber");
+  setup.bodies.push_back(std::move(body));
+  return buildSceneTopology(setup);
+}
+
+TEST(ContactAccuracy, TheShortEdgeIsTheAreaWeightedQuantileOfTheSortedEdges) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);
+  for (int level : {1, 2, 3}) {
+    TriangleMesh mesh = makeIcosphere(level, 0.5f);
+    for (Vec3f& p : mesh.positions) p += Vec3f(jitter(random), jitter(random), jitter(random));
+    const SceneTopology topology = bodyOf(mesh);
+    EXPECT_EQ(contactEdgeLength(topology), sortedWeightedQuantile(topology)) << "level " << level;
+  }
+}
+
+/// Splits each triangle within `angle` of the top of a sphere centred at the origin into four, at
+/// its edges' midpoints, `rounds` times: a finely modelled patch (an eye, a beak, a logo), with
+/// hanging vertices at its border, which the edge lengths do not mind.
+void refineCap(TriangleMesh& mesh, float angle, int rounds) {
+  for (int round = 0; round < rounds; ++round) {
+    const std::size_t count = mesh.triangles.size();
+    for (std::size_t k = 0; k < count; ++k) {
+      const Triangle t = mesh.triangles[k];
+      const Vec3f centroid =
+          (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3;
+      if (centroid.normalized().dot(Vec3f::UnitY()) < std::cos(angle)) continue;
+      Index mid[3];
+      for (int e = 0; e < 3; ++e) {
+        mid[e] = Index(mesh.positions.size());
+        mesh.positions.push_back(0.5f * (mesh.positions[t[e]] + mesh.positions[t[(e + 1) % 3]]));
+      }
+      mesh.triangles[k] = {mid[0], mid[1], mid[2]};
+      mesh.triangles.push_back({t[0], mid[0], mid[2]});
+      mesh.triangles.push_back({mid[0], t[1], mid[1]});
+      mesh.triangles.push_back({mid[2], mid[1], t[2]});
+    }
+  }
+}
+
+TEST(ContactAccuracy, AFinelyMeshedPatchOverLittleOfTheSurfaceDoesNotSetTheShortEdge) {
+  // A cap of 2% of a sphere's surface refined twice: a third of the edges are a quarter of the
+  // others' length, as a character's eyes and beak are. They carry 2% of the area, under the
+  // quantile's 5%, so the short edge stays the sphere's; counted by edges alone it would be the
+  // patch's.
+  const SceneTopology uniform = bodyOf(makeIcosphere(3, 0.5f));
+  TriangleMesh patched = makeIcosphere(3, 0.5f);
+  refineCap(patched, 0.28f, 2);
+  const SceneTopology refined = bodyOf(patched);
+  ASSERT_GT(refined.triangles.size(), uniform.triangles.size() * 5 / 4) << "the patch was refined";
+  EXPECT_NEAR(contactEdgeLength(refined), contactEdgeLength(uniform),
+              0.05 * contactEdgeLength(uniform));
+
+  // A body meshed finely all over does set it: a quarter of the length.
+  const SceneTopology fine = bodyOf(makeIcosphere(5, 0.5f));
+  EXPECT_LT(contactEdgeLength(fine), 0.3 * contactEdgeLength(uniform));
 }
 
 }  // namespace
