@@ -226,6 +226,9 @@ struct FrameRenderer::Gl {
   std::vector<std::uint8_t> groundImage;
   Eigen::AlignedBox3f staticBounds;  ///< the static meshes, drawn every frame
   PixelRect changed;                 ///< the pixels this frame draws, resolves and reads back
+  /// Of those, the bodies': the contact view's translucent layers lie there, not over the
+  /// shadows around them.
+  PixelRect bodyPixels;
   // Per-frame scratch, kept to avoid allocating every frame.
   std::vector<BlobShadow> shadows;
   std::vector<Vec3f> normals;
@@ -460,20 +463,21 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
   const Lighting light = lighting();
-  ChangedPixels changed(light.viewProjection, w, h);
-  uploadBodies(frame, changed);
+  ChangedPixels changed(light.viewProjection, w, h), bodies(light.viewProjection, w, h);
+  uploadBodies(frame, changed, bodies);
   if (options_.contacts)
     for (const Contact& c : frame.contacts)
       changed.addBox(c.position.cast<float>() - Vec3f::Constant(scene_.contactRadius),
                      c.position.cast<float>() + Vec3f::Constant(scene_.contactRadius));
   if (!gl.staticBounds.isEmpty()) changed.addBox(gl.staticBounds.min(), gl.staticBounds.max());
   gl.changed = options_.redrawWholeFrame ? PixelRect{0, 0, w, h} : changed.rect();
+  gl.bodyPixels = options_.redrawWholeFrame ? gl.changed : bodies.rect();
   const PixelRect& r = gl.changed;
   if (r.empty()) return readImage(frame.number);
 
   // Every pass below touches the changed pixels only; the rest of the image is the ground.
   glEnable(GL_SCISSOR_TEST);
-  glScissor(r.x0, r.y0, r.width(), r.height());
+  scissor(r);
   const GLuint target = gl.samples > 1 ? gl.multisampleFbo : gl.resolveFbo;
   glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.groundFbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target);
@@ -507,8 +511,10 @@ FrameRenderer::Lighting FrameRenderer::lighting() const {
 }
 
 /// Bodies' positions and smooth normals for this frame, and the blob shadows of the first
-/// kMaxShadows bodies (into Gl::shadows); adds the pixels both can cover to `changed`.
-void FrameRenderer::uploadBodies(const Frame& frame, ChangedPixels& changed) {
+/// kMaxShadows bodies (into Gl::shadows); adds the pixels both can cover to `changed`, and those
+/// of the bodies alone to `bodies`.
+void FrameRenderer::uploadBodies(const Frame& frame, ChangedPixels& changed,
+                                 ChangedPixels& bodies) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
   gl.shadows.clear();
@@ -532,6 +538,7 @@ void FrameRenderer::uploadBodies(const Frame& frame, ChangedPixels& changed) {
                     gl.interleaved.data());
     if (body.particleCount == 0) continue;
     changed.addBox(bounds.min(), bounds.max());
+    bodies.addBox(bounds.min(), bounds.max());
     if (b < kMaxShadows && gl.ground.indexCount > 0) {
       const Vec3f center = (sum / double(body.particleCount)).cast<float>();
       float radius = 0;
@@ -628,6 +635,8 @@ void FrameRenderer::drawStatics() {
 void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
   Gl& gl = *gl_;
   const SceneTopology& topology = *scene_.topology;
+  if (gl.bodyPixels.empty()) return;
+  scissor(gl.bodyPixels);
   glBindFramebuffer(GL_FRAMEBUFFER, gl.oitFbo);
   const GLfloat clearAccumulation[] = {0, 0, 0, 1}, clearWeight[] = {0, 0, 0, 0};
   glClearBufferfv(GL_COLOR, 0, clearAccumulation);
@@ -655,6 +664,7 @@ void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
   }
   glDisable(GL_BLEND);
   glDepthMask(GL_TRUE);
+  scissor(gl.changed);
 }
 
 /// The contacts as instanced spheres, opaque, in the contact colour or their kind's.
@@ -691,6 +701,8 @@ void FrameRenderer::drawContacts(const Frame& frame, const Lighting& lighting) {
 void FrameRenderer::compositeTranslucent() {
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
+  if (gl.bodyPixels.empty()) return;
+  scissor(gl.bodyPixels);
   if (gl.oitFbo != gl.oitResolveFbo) {
     // Each target resolved on its own: a blit copies the read buffer into every draw buffer.
     glBindFramebuffer(GL_READ_FRAMEBUFFER, gl.oitFbo);
@@ -698,7 +710,7 @@ void FrameRenderer::compositeTranslucent() {
     for (GLenum target : {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}) {
       glReadBuffer(target);
       glDrawBuffer(target);
-      blit(gl.changed, GL_COLOR_BUFFER_BIT);
+      blit(gl.bodyPixels, GL_COLOR_BUFFER_BIT);
     }
     const GLenum targets[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, targets);
@@ -723,6 +735,7 @@ void FrameRenderer::compositeTranslucent() {
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, 0);
   glDisable(GL_BLEND);
+  scissor(gl.changed);
 }
 
 /// The ground quad: grid and fade towards the horizon.
@@ -804,6 +817,10 @@ std::vector<std::uint8_t> FrameRenderer::readImage(int frameNumber) {
 
 PixelRect FrameRenderer::changedPixels() const {
   return gl_->changed;
+}
+
+void FrameRenderer::scissor(const PixelRect& r) {
+  glScissor(r.x0, r.y0, r.width(), r.height());
 }
 
 /// The same rectangle from the bound read framebuffer to the bound draw framebuffer.

@@ -147,7 +147,7 @@ class FrameRenderer {
 
   void createMeshes();
   void createFramebuffers();
-  void uploadBodies(const Frame& frame, ChangedPixels& changed);
+  void uploadBodies(const Frame& frame, ChangedPixels& changed, ChangedPixels& bodies);
   void addShadow(const Vec3f& center, float radius, ChangedPixels& changed);
   void createContactView();
   void useSurfaceProgram(unsigned program, const Lighting& lighting);
@@ -165,6 +165,7 @@ class FrameRenderer {
   Lighting lighting() const;
   Eigen::Vector2f groundFade() const;
   std::vector<std::uint8_t> readImage(int frameNumber);
+  void scissor(const PixelRect& r);
   void blit(const PixelRect& r, unsigned mask);
   void readPixels(unsigned framebuffer, const PixelRect& r, std::vector<std::uint8_t>& image);
   RenderScene scene_;
