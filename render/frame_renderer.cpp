@@ -593,8 +593,16 @@ void FrameRenderer::drawBodies() {
     glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
   }
   uniform(gl.surfaceProgram, "uSpecular", 0.25f);
-  for (std::size_t b = 0; b < topology.bodies.size(); ++b)
+  // A closed body seen from outside hides its back faces behind its front ones: culled, llvmpipe
+  // sets up half the triangles. An open one shows its inside.
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+    if (topology.bodies[b].closed)
+      glEnable(GL_CULL_FACE);
+    else
+      glDisable(GL_CULL_FACE);
     drawBody(gl.surfaceProgram, b, bodyColor(options_, b));
+  }
+  glDisable(GL_CULL_FACE);
   if (options_.wireframe) {
     glDisable(GL_POLYGON_OFFSET_FILL);
     drawBodyEdges(gl.surfaceProgram);
