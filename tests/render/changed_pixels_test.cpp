@@ -96,10 +96,10 @@ TEST(ChangedPixels, NothingAddedIsEmptyAndAnythingBehindTheCameraIsTheWholeImage
   EXPECT_LE(clipped.x1, kWidth);
 }
 
-/// A ball over the ground and a static block beside it, rendered frame by frame as it rises,
-/// with contacts on it, by a renderer that draws only the changed pixels and by one that redraws
-/// every pixel: the images must be the same bytes, in both contact views, with and without
-/// multisampling and the wireframe.
+/// A ball over the ground and a static block beside it, rendered frame by frame as it rises and
+/// then around the camera, with contacts on it, by a renderer that draws only the changed pixels
+/// and by one that redraws every pixel: the images must be the same bytes, in both contact views,
+/// with and without multisampling and the wireframe.
 TEST(FrameRenderer, DrawingOnlyTheChangedPixelsGivesTheWholeRedrawsImage) {
   SceneSetup setup;
   BodySetup body;
@@ -134,11 +134,15 @@ TEST(FrameRenderer, DrawingOnlyTheChangedPixelsGivesTheWholeRedrawsImage) {
     ASSERT_TRUE(whole) << whyNot_;
 
     int partial = 0;
-    for (int step = 0; step < 6; ++step) {
+    const Vec3f eye = changedOnly->scene().camera.position;
+    for (int step = 0; step < 7; ++step) {
       Frame frame;
       frame.number = step + 1;
       frame.positions = world->restPosition;
       for (Vec3& p : frame.positions) p.y() += Scalar(0.35) * Scalar(step);  // a wider shadow
+      if (step ==
+          6)  // around the camera: part of the ball behind it, part clipped by the near plane
+        for (Vec3& p : frame.positions) p += (eye - Vec3f(0, 0.6f, 0)).cast<Scalar>();
       Contact contact;
       contact.position = frame.positions[0];
       frame.contacts = {contact};
@@ -146,6 +150,9 @@ TEST(FrameRenderer, DrawingOnlyTheChangedPixelsGivesTheWholeRedrawsImage) {
       const std::vector<std::uint8_t> drawn = changedOnly->renderRgb(frame);
       const PixelRect r = changedOnly->changedPixels();
       partial += r.width() * r.height() < kWidth * kHeight;
+      if (step == 6) {
+        EXPECT_EQ(r.width() * r.height(), kWidth * kHeight) << "a vertex behind the eye";
+      }
       whole->makeCurrent();
       EXPECT_EQ(drawn, whole->renderRgb(frame))
           << contactsViewName(variant.view) << ", " << variant.samples << " samples, frame "
