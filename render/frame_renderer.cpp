@@ -587,26 +587,32 @@ void FrameRenderer::useSurfaceProgram(unsigned program, const Lighting& lighting
 /// program in use (useSurfaceProgram()).
 void FrameRenderer::drawBodies() {
   Gl& gl = *gl_;
-  const SceneTopology& topology = *scene_.topology;
   if (options_.wireframe) {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1, 1);  // the edges drawn afterwards win the depth test
   }
   uniform(gl.surfaceProgram, "uSpecular", 0.25f);
-  // A closed body seen from outside hides its back faces behind its front ones: culled, llvmpipe
-  // sets up half the triangles. An open one shows its inside.
+  drawBodySurfaces(gl.surfaceProgram);
+  if (options_.wireframe) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    drawBodyEdges(gl.surfaceProgram);
+  }
+}
+
+/// Every body's triangles in its colour. A closed body's back faces are culled: seen from outside
+/// they lie behind its front ones (opaque, hidden; translucent, a layer that would add little to
+/// the picture and as much again to llvmpipe's blending), and llvmpipe sets up half the
+/// triangles. An open mesh shows both sides.
+void FrameRenderer::drawBodySurfaces(unsigned program) {
+  const SceneTopology& topology = *scene_.topology;
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
     if (topology.bodies[b].closed)
       glEnable(GL_CULL_FACE);
     else
       glDisable(GL_CULL_FACE);
-    drawBody(gl.surfaceProgram, b, bodyColor(options_, b));
+    drawBody(program, b, bodyColor(options_, b));
   }
   glDisable(GL_CULL_FACE);
-  if (options_.wireframe) {
-    glDisable(GL_POLYGON_OFFSET_FILL);
-    drawBodyEdges(gl.surfaceProgram);
-  }
 }
 
 void FrameRenderer::drawBody(unsigned program, std::size_t b, const Vec3f& color) {
@@ -642,7 +648,6 @@ void FrameRenderer::drawStatics() {
 /// in as more opaque layers.
 void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
   Gl& gl = *gl_;
-  const SceneTopology& topology = *scene_.topology;
   if (gl.bodyPixels.empty()) return;
   scissor(gl.bodyPixels);
   glBindFramebuffer(GL_FRAMEBUFFER, gl.oitFbo);
@@ -656,16 +661,7 @@ void FrameRenderer::drawTranslucentBodies(const Lighting& lighting) {
   uniform(gl.translucentProgram, "uDepthScale", scene_.size);
   uniform(gl.translucentProgram, "uSpecular", 0.25f);
   uniform(gl.translucentProgram, "uAlpha", 0.3f);
-  // A closed body shows its front layer only: its back layer would add little to the picture
-  // and as much again to llvmpipe's blending. Open meshes show both sides.
-  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
-    if (topology.bodies[b].closed)
-      glEnable(GL_CULL_FACE);
-    else
-      glDisable(GL_CULL_FACE);
-    drawBody(gl.translucentProgram, b, bodyColor(options_, b));
-  }
-  glDisable(GL_CULL_FACE);
+  drawBodySurfaces(gl.translucentProgram);
   if (options_.wireframe) {
     uniform(gl.translucentProgram, "uAlpha", 0.6f);
     drawBodyEdges(gl.translucentProgram);

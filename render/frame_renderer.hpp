@@ -152,6 +152,7 @@ class FrameRenderer {
   void createContactView();
   void useSurfaceProgram(unsigned program, const Lighting& lighting);
   void drawBodies();
+  void drawBodySurfaces(unsigned program);
   /// Body b's triangles in `color`, with `program` in use.
   void drawBody(unsigned program, std::size_t b, const Vec3f& color);
   /// The wireframe: every body's edges as flat lines in a dark shade of its colour.
