@@ -706,7 +706,7 @@ void FrameRenderer::drawContacts(const Frame& frame, const Lighting& lighting) {
 }
 
 /// The contact view's translucent layers over the resolved opaque image (in resolveFbo), over the
-/// changed pixels.
+/// bodies' pixels, where drawTranslucentBodies() left them.
 void FrameRenderer::compositeTranslucent() {
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
