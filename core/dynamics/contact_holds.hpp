@@ -34,7 +34,9 @@ class ContactHolds {
   std::span<std::int32_t> touchedPlane() { return touchedPlane_; }
   std::span<const std::int32_t> touchedPlane() const { return touchedPlane_; }
 
-  /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`.
+  /// Before an implicit step of `dt`: holds every particle left on a plane in `solver`, and every
+  /// free one the step is expected to bring within the skin of one: its velocity changed by the
+  /// solver's last Δv (its warm start) ends the step there.
   void holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt);
 
   /// After an implicit step, before its plane pass: marks every particle the step left on or
