@@ -71,15 +71,25 @@ bool changedSides(const std::pair<Scalar, Scalar>& sides) {
   return (sides.first > 0 && sides.second < 0) || (sides.first < 0 && sides.second > 0);
 }
 
-/// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
-/// it): intersectSegmentTriangle's own first rejection, computed the same way, so skipping the
-/// test then changes nothing. Most candidates end here.
-bool mayCross(const SubstepMotion& motion, Index p, const ParticleTarget& target) {
+/// The sides of the target's plane that particle p's shifted motion starts and ends on, as
+/// intersectSegmentTriangle computes them.
+struct ParticleSides {
+  Scalar start, end;
+};
+
+ParticleSides particleSides(const SubstepMotion& motion, Index p, const ParticleTarget& target) {
   const Vec3 start = motion.start[p] + target.shift;
-  const Scalar startSide = target.normal.dot(start - target.now[0]);
-  const Scalar endSide = target.normal.dot(motion.end[p] - target.now[0]);
-  return (!((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) &&
-          startSide != endSide) ||
+  return {target.normal.dot(start - target.now[0]),
+          target.normal.dot(motion.end[p] - target.now[0])};
+}
+
+/// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
+/// it): intersectSegmentTriangle's own first rejection, so skipping the test then changes nothing.
+/// Most candidates end here.
+bool mayCross(const SubstepMotion& motion, Index p, const ParticleTarget& target,
+              const ParticleSides& sides) {
+  return (!((sides.start > 0 && sides.end > 0) || (sides.start < 0 && sides.end < 0)) &&
+          sides.start != sides.end) ||
          (target.open && changedSides(sidesAcrossTheStep(motion, p, target)));
 }
 
@@ -105,16 +115,16 @@ bool crossedOpenSurface(const SubstepMotion& motion, Index p, const ParticleTarg
 
 /// Tests particle p's motion against the target triangle.
 bool testParticle(const CollisionGeometry& geometry, const SubstepMotion& motion, Index p,
-                  const ParticleTarget& target, ParticleContact& contact) {
+                  const ParticleTarget& target, const ParticleSides& sides,
+                  ParticleContact& contact) {
   const Index triangle = target.triangle;
   const TriangleCorners& now = target.now;
-  const Vec3 start = motion.start[p] + target.shift;
-  const Vec3& end = motion.end[p];
-  if (!intersectSegmentTriangle(start, end, now[0], now[1], now[2], contact.hit))
+  const Vec3& normal = target.normal;
+  if (!intersectSegmentTriangle(motion.start[p] + target.shift, motion.end[p], now[0], now[1],
+                                now[2], normal, sides.start, sides.end, contact.hit))
     return target.open && crossedOpenSurface(motion, p, target, contact);
 
-  const Vec3& normal = target.normal;
-  const Scalar startSide = normal.dot(start - now[0]), endSide = normal.dot(end - now[0]);
+  const Scalar startSide = sides.start, endSide = sides.end;
   Scalar orientation;
   if (geometry.surfaceClosed[geometry.triangleSurface[triangle]]) {
     // A closed surface has an outside: only entering counts. A particle on its way out (left
@@ -222,10 +232,13 @@ void CollisionDetector::findParticleContacts(const SceneTopology& topology,
       if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
       const Triangle& struck = geometry.triangleVertices[against];
       const ParticleTarget target = particleTarget(geometry, motion, against);
-      for (Index p : geometry.triangleVertices[from])
-        if (topology.inverseMass[p] != 0 && !hasVertex(struck, p) && mayCross(motion, p, target) &&
-            testsFrom(from, p, against) && testParticle(geometry, motion, p, target, contact))
+      for (Index p : geometry.triangleVertices[from]) {
+        if (topology.inverseMass[p] == 0 || hasVertex(struck, p)) continue;
+        const ParticleSides sides = particleSides(motion, p, target);
+        if (mayCross(motion, p, target, sides) && testsFrom(from, p, against) &&
+            testParticle(geometry, motion, p, target, sides, contact))
           hits.push_back(contact);
+      }
     };
     const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
     for (std::size_t i = chunk * perChunk; i < stop; ++i) {

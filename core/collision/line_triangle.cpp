@@ -7,8 +7,13 @@ namespace softbake {
 bool intersectSegmentTriangle(const Vec3& start, const Vec3& end, const Vec3& a, const Vec3& b,
                               const Vec3& c, SegmentTriangleHit& hit) {
   const Vec3 normal = (b - a).cross(c - a);
-  const Scalar startSide = normal.dot(start - a);
-  const Scalar endSide = normal.dot(end - a);
+  return intersectSegmentTriangle(start, end, a, b, c, normal, normal.dot(start - a),
+                                  normal.dot(end - a), hit);
+}
+
+bool intersectSegmentTriangle(const Vec3& start, const Vec3& end, const Vec3& a, const Vec3& b,
+                              const Vec3& c, const Vec3& normal, Scalar startSide, Scalar endSide,
+                              SegmentTriangleHit& hit) {
   // Both strictly on one side, or both on the plane (in-plane, or a degenerate triangle whose
   // normal is zero): no crossing.
   if ((startSide > 0 && endSide > 0) || (startSide < 0 && endSide < 0)) return false;

@@ -28,4 +28,11 @@ struct SegmentTriangleHit {
 bool intersectSegmentTriangle(const Vec3& start, const Vec3& end, const Vec3& a, const Vec3& b,
                               const Vec3& c, SegmentTriangleHit& hit);
 
+/// The same test where the caller has the triangle's normal, (b − a) × (c − a), and the segment's
+/// ends' sides of its plane, normal · (start − a) and normal · (end − a), from a rejection of its
+/// own: the same result, bit for bit, without computing them again.
+bool intersectSegmentTriangle(const Vec3& start, const Vec3& end, const Vec3& a, const Vec3& b,
+                              const Vec3& c, const Vec3& normal, Scalar startSide, Scalar endSide,
+                              SegmentTriangleHit& hit);
+
 }  // namespace softbake

@@ -6,14 +6,14 @@ int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const Triang
                                std::array<EdgeHit, 2>& hits) {
   // All three corners strictly on one side of the face's plane: no edge can cross it. The sides
   // are computed exactly as intersectSegmentTriangle computes them, so this only skips tests that
-  // would fail; most broad-phase pairs are near misses and end here.
-  {
-    const Vec3 faceNormal = (face[1] - face[0]).cross(face[2] - face[0]);
-    const Scalar s0 = faceNormal.dot(edgeTriangle[0] - face[0]);
-    const Scalar s1 = faceNormal.dot(edgeTriangle[1] - face[0]);
-    const Scalar s2 = faceNormal.dot(edgeTriangle[2] - face[0]);
-    if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return 0;
-  }
+  // would fail; most broad-phase pairs are near misses and end here. The segment tests take them
+  // as their edges' ends' sides.
+  const Vec3 faceNormal = (face[1] - face[0]).cross(face[2] - face[0]);
+  const std::array<Scalar, 3> side{faceNormal.dot(edgeTriangle[0] - face[0]),
+                                   faceNormal.dot(edgeTriangle[1] - face[0]),
+                                   faceNormal.dot(edgeTriangle[2] - face[0])};
+  if ((side[0] > 0 && side[1] > 0 && side[2] > 0) || (side[0] < 0 && side[1] < 0 && side[2] < 0))
+    return 0;
   // A zero-area edge triangle lies on one line, and its longest edge covers the other two: testing
   // all three would report one crossing up to three times, at points a rounding error apart.
   int firstEdge = 0, passes = 3;
@@ -34,8 +34,9 @@ int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const Triang
   for (int pass = 0; pass < passes && count < 2; ++pass) {
     const int edge = firstEdge + pass;
     SegmentTriangleHit hit;
-    if (!intersectSegmentTriangle(edgeTriangle[edge], edgeTriangle[(edge + 1) % 3], face[0],
-                                  face[1], face[2], hit))
+    const int next = (edge + 1) % 3;
+    if (!intersectSegmentTriangle(edgeTriangle[edge], edgeTriangle[next], face[0], face[1], face[2],
+                                  faceNormal, side[edge], side[next], hit))
       continue;
     // Two edges of a proper triangle share only corners, and a corner hit is returned exactly:
     // equality is the whole duplicate test.
