@@ -129,6 +129,7 @@ class SlicedSpringMatrix {
   std::vector<Scalar> restLength_, stiffness_, damping_, used_;
   std::vector<Scalar> laneMass_;  ///< the masses, padded with zeros to whole slices
   bool avx2_ = false;             ///< the processor runs AVX2
+  bool gatherable_ = false;       ///< AVX2, and every vector's offset fits a gather's 32 bits
 };
 
 }  // namespace softbake
