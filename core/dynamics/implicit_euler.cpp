@@ -153,100 +153,119 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
       });
 }
 
-template <class Chunk>
-std::pair<double, double> ImplicitEuler::sumOverChunks(std::size_t count, const Chunk& chunk) {
-  tbb::parallel_for(std::size_t(0), chunkSum_.size(), [&](std::size_t c) {
-    chunkSum_[c] = chunk(c * kChunk, std::min(count, (c + 1) * kChunk));
-  });
-  std::pair<double, double> total{0, 0};
-  for (const auto& [first, second] : chunkSum_) {
-    total.first += first;
-    total.second += second;
-  }
-  return total;
-}
-
-double ImplicitEuler::multiplyDirection(const SceneTopology& topology) {
-  return sumOverChunks(topology.particleCount(),
-                       [&](std::size_t begin, std::size_t end) {
-                         return std::pair<double, double>{
-                             matrix_.multiply(direction_.data(), product_.data(),
-                                              topology.inverseMass.data(), begin, end),
-                             0};
-                       })
-      .first;
-}
-
 void ImplicitEuler::solve(const SceneTopology& topology) {
   // Preconditioned CG (Shewchuk 1994, B3), warm-started from the previous step's Δv: successive
   // steps change velocity alike, so the first residual is already small. Pinned entries stay 0.
   // Held particles start, and stay, with their prescribed normal part (modified PCG, Baraff &
   // Witkin §5.3): the residual, its preconditioned form and so every search direction are
   // filtered, and the filtered-out normal part of the residual is kept as the surface's impulse.
+  //
+  // The passes run as the phases of one parallel region (chunk_phases.hpp): the warm start's
+  // product, the first residual, its norm, then per iteration the product of the direction, the
+  // update of Δv and the residual, and the next direction. Each between() reads the chunk sums in
+  // chunk order and picks the next pass.
   const std::size_t n = topology.particleCount();
+  const Scalar* inverseMass = topology.inverseMass.data();
   for (Index i : held_) deltaV_[i] = filtered(i, deltaV_[i]) + holdSpeed_[i] * holdNormal_[i];
-  std::swap(direction_, deltaV_);  // the product of the warm start, computed into product_
-  multiplyDirection(topology);
-  std::swap(direction_, deltaV_);
-  auto [rz, rhsSquared] = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
-    double rzChunk = 0, bb = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      const Vec3 residual = rhs_[i] - product_[i];
-      holdResidual_[i] = holdNormal_[i].dot(residual);
-      residual_[i] = residual - holdResidual_[i] * holdNormal_[i];
-      preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
-      direction_[i] = preconditioned_[i];
-      rzChunk += dot(residual_[i], preconditioned_[i]);
-      const Vec3 rhs = filtered(Index(i), rhs_[i]);
-      bb += dot(rhs, rhs);
-    }
-    return std::pair<double, double>{rzChunk, bb};
-  });
-  const double rhsNorm = std::sqrt(rhsSquared);
+  enum class Pass { WarmProduct, Residual, ResidualNorm, Product, Update, Direction };
+  Pass pass = Pass::WarmProduct;
+  double rz = 0, rhsNorm = 0, tolerance = 0, curvature = 0;
+  Scalar alpha = 0, beta = 0;
+  int iteration = 0;
+  bool zeroRhs = false;
   stats_ = {};
-  if (rhsNorm == 0) {
-    forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
-    return;
-  }
-  const double tolerance = kTolerance * rhsNorm;
-  double residualSquared = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
-                             double rr = 0;
-                             for (std::size_t i = begin; i < end; ++i)
-                               rr += dot(residual_[i], residual_[i]);
-                             return std::pair<double, double>{rr, 0};
-                           }).first;
-  stats_.relativeResidual = std::sqrt(residualSquared) / rhsNorm;
-  if (stats_.relativeResidual <= kTolerance) return;
-  for (int iteration = 1; iteration <= kMaxIterations; ++iteration) {
-    const double curvature = multiplyDirection(topology);
-    if (!(curvature > 0)) break;  // converged to rounding, or a degenerate direction
-    const Scalar alpha = Scalar(rz / curvature);
-    double rzNext = 0;
-    std::tie(residualSquared, rzNext) = sumOverChunks(n, [&](std::size_t begin, std::size_t end) {
-      double rr = 0, rzChunk = 0;
-      for (std::size_t i = begin; i < end; ++i) {
-        deltaV_[i] += alpha * direction_[i];
-        if (isHeld_[i]) {
-          const Scalar normalPart = holdNormal_[i].dot(product_[i]);
-          holdResidual_[i] -= alpha * normalPart;
-          residual_[i] -= alpha * (product_[i] - normalPart * holdNormal_[i]);
+  const auto runPass = [&](std::size_t chunk) {
+    const std::size_t begin = chunk * kChunk, end = std::min(n, (chunk + 1) * kChunk);
+    double first = 0, second = 0;
+    switch (pass) {
+      case Pass::WarmProduct:
+        matrix_.multiply(deltaV_.data(), product_.data(), inverseMass, begin, end);
+        break;
+      case Pass::Residual:
+        for (std::size_t i = begin; i < end; ++i) {
+          const Vec3 residual = rhs_[i] - product_[i];
+          holdResidual_[i] = holdNormal_[i].dot(residual);
+          residual_[i] = residual - holdResidual_[i] * holdNormal_[i];
           preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
-        } else {  // the filter with a zero normal, without its work
-          residual_[i] -= alpha * product_[i];
-          preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
+          direction_[i] = preconditioned_[i];
+          first += dot(residual_[i], preconditioned_[i]);
+          const Vec3 rhs = filtered(Index(i), rhs_[i]);
+          second += dot(rhs, rhs);
         }
-        rr += dot(residual_[i], residual_[i]);
-        rzChunk += dot(residual_[i], preconditioned_[i]);
+        break;
+      case Pass::ResidualNorm:
+        for (std::size_t i = begin; i < end; ++i) first += dot(residual_[i], residual_[i]);
+        break;
+      case Pass::Product:
+        first = matrix_.multiply(direction_.data(), product_.data(), inverseMass, begin, end);
+        break;
+      case Pass::Update:
+        for (std::size_t i = begin; i < end; ++i) {
+          deltaV_[i] += alpha * direction_[i];
+          if (isHeld_[i]) {
+            const Scalar normalPart = holdNormal_[i].dot(product_[i]);
+            holdResidual_[i] -= alpha * normalPart;
+            residual_[i] -= alpha * (product_[i] - normalPart * holdNormal_[i]);
+            preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
+          } else {  // the filter with a zero normal, without its work
+            residual_[i] -= alpha * product_[i];
+            preconditioned_[i] = inverseDiagonal_[i] * residual_[i];
+          }
+          first += dot(residual_[i], residual_[i]);
+          second += dot(residual_[i], preconditioned_[i]);
+        }
+        break;
+      case Pass::Direction:
+        for (std::size_t i = begin; i < end; ++i)
+          direction_[i] = preconditioned_[i] + beta * direction_[i];
+        break;
+    }
+    chunkSum_[chunk] = {first, second};
+  };
+  const auto between = [&] {
+    std::pair<double, double> total{0, 0};
+    for (const auto& [first, second] : chunkSum_) {
+      total.first += first;
+      total.second += second;
+    }
+    switch (pass) {
+      case Pass::WarmProduct:
+        pass = Pass::Residual;
+        return true;
+      case Pass::Residual:
+        rz = total.first;
+        rhsNorm = std::sqrt(total.second);
+        zeroRhs = rhsNorm == 0;
+        tolerance = kTolerance * rhsNorm;
+        pass = Pass::ResidualNorm;
+        return !zeroRhs;
+      case Pass::ResidualNorm:
+        stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
+        iteration = 1;
+        pass = Pass::Product;
+        return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
+      case Pass::Product:
+        curvature = total.first;
+        alpha = Scalar(rz / curvature);
+        pass = Pass::Update;
+        return curvature > 0;  // else converged to rounding, or a degenerate direction
+      case Pass::Update: {
+        stats_.iterations = iteration;
+        stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
+        if (std::sqrt(total.first) <= tolerance) return false;
+        beta = Scalar(total.second / rz);
+        rz = total.second;
+        pass = Pass::Direction;
+        return true;
       }
-      return std::pair<double, double>{rr, rzChunk};
-    });
-    stats_.iterations = iteration;
-    stats_.relativeResidual = std::sqrt(residualSquared) / rhsNorm;
-    if (std::sqrt(residualSquared) <= tolerance) break;
-    const Scalar beta = Scalar(rzNext / rz);
-    rz = rzNext;
-    forEachParticle(n, [&](Index i) { direction_[i] = preconditioned_[i] + beta * direction_[i]; });
-  }
+      case Pass::Direction:
+        pass = Pass::Product;
+        return ++iteration <= kMaxIterations;
+    }
+    return false;
+  };
+  phases_.run(chunkSum_.size(), runPass, between);
+  if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
 bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,

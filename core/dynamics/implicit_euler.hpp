@@ -51,6 +51,7 @@
 
 #include <Eigen/Core>
 
+#include "core/dynamics/chunk_phases.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/sliced_spring_matrix.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -115,12 +116,6 @@ class ImplicitEuler {
  private:
   void assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                 const SimulationState& state);
-  /// product = (M + Σ S)·direction with pinned rows zeroed; returns direction·product.
-  double multiplyDirection(const SceneTopology& topology);
-  /// Runs chunk(begin, end) over fixed chunks of particles in parallel, each returning two partial
-  /// sums; returns the two totals, summed in chunk order.
-  template <class Chunk>
-  std::pair<double, double> sumOverChunks(std::size_t count, const Chunk& chunk);
   void solve(const SceneTopology& topology);
   /// Makes each body without pins or held particles change momentum by exactly its external
   /// impulse.
@@ -146,6 +141,7 @@ class ImplicitEuler {
   /// the particles are always 0.
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
   std::vector<std::pair<double, double>> chunkSum_;
+  ChunkPhases phases_;  ///< the solve's passes, in one parallel region
   /// Holds of the next step, per particle: the unit normal (zero when not held), the velocity
   /// along it, the friction coefficient; then the normal part of the residual during the solve.
   std::vector<Vec3> holdNormal_;
