@@ -84,17 +84,22 @@ void Simulator::step(int frame) {
   const Scalar dt = Scalar(substeps_.timeStep);
   bool finite = false;
   if (implicit_) {
-    holds_->holdFor(*implicit_, state_, dt);
+    holds_->holdFor(*implicit_, state_, dt, true);
     if (!topology.planes.empty()) velocityStart_ = state_.velocity;
     finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
     // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is held.
+    std::size_t changedHolds = 0;
     if (finite && !topology.planes.empty() &&
-        topology.settings.collisions.response != ResponseMode::None &&
-        holds_->catchImpacts(state_) > 0) {
-      // Again from the start, with the particles that met a plane held (contact_holds.hpp).
+        topology.settings.collisions.response != ResponseMode::None) {
+      changedHolds = holds_->catchImpacts(state_);  // first: a hold let go is not caught again
+      changedHolds += holds_->dropWrongExpectations(*implicit_);
+    }
+    if (changedHolds > 0) {
+      // Again from the start, with the particles that met a plane held and those wrongly expected
+      // to let go (contact_holds.hpp).
       std::copy(substepStart_.begin(), substepStart_.end(), state_.position.begin());
       std::copy(velocityStart_.begin(), velocityStart_.end(), state_.velocity.begin());
-      holds_->holdFor(*implicit_, state_, dt);
+      holds_->holdFor(*implicit_, state_, dt, false);
       finite = implicit_->stepAgain(topology, dt, state_, substepStart_);
     }
   } else {
