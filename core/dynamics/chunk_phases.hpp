@@ -27,6 +27,9 @@
 #include <optional>
 #include <thread>
 
+#include "core/error.hpp"
+#include "core/text.hpp"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -34,6 +37,9 @@
 namespace softbake {
 
 class ChunkPhases {
+  /// Bits of the claims word for each of a phase's front and back (see openPhase()).
+  static constexpr int kChunkBits = 20;
+
  public:
   ChunkPhases() = default;
   // Its state lasts one run(): a copy starts afresh, so the objects that hold one stay copyable
@@ -41,14 +47,17 @@ class ChunkPhases {
   ChunkPhases(const ChunkPhases&) {}
   ChunkPhases& operator=(const ChunkPhases&) { return *this; }
 
-  /// Most chunks a phase may have.
-  static constexpr std::size_t kMaxChunks = 0xffff;
+  /// Most chunks a phase may have, and most phases a run may have (the claims word's fields).
+  static constexpr std::size_t kMaxChunks = (std::size_t(1) << kChunkBits) - 1;
+  static constexpr std::uint64_t kMaxPhases = (std::uint64_t(1) << (64 - 2 * kChunkBits)) - 1;
 
   /// Runs pass(chunk) for chunk 0..chunks-1 of a phase, then between(), until between() returns
-  /// false. pass() and between() must not start TBB work of their own. chunks ≤ kMaxChunks.
+  /// false, at most kMaxPhases times. pass() and between() must not start TBB work of their own.
   template <class Pass, class Between>
   void run(std::size_t chunks, const Pass& pass, const Between& between) {
     if (chunks == 0) return;
+    if (chunks > kMaxChunks)
+      throw Error(cat(chunks, " chunks exceed the ", kMaxChunks, " a phase can count"));
     joined_.store(0, std::memory_order_relaxed);
     finished_.store(0, std::memory_order_relaxed);
     claims_.store(openPhase(0, chunks), std::memory_order_relaxed);
@@ -61,7 +70,8 @@ class ChunkPhases {
           pass(*chunk);
           if (finished_.fetch_add(1, std::memory_order_acq_rel) + 1 < chunks) continue;
           finished_.store(0, std::memory_order_relaxed);
-          if (!between()) stopAt_.store(phase + 1, std::memory_order_relaxed);
+          if (!between() || phase + 1 == kMaxPhases)
+            stopAt_.store(phase + 1, std::memory_order_relaxed);
           claims_.store(openPhase(phase + 1, chunks), std::memory_order_relaxed);
           completed_.store(phase + 1, std::memory_order_release);
         }
@@ -76,11 +86,12 @@ class ChunkPhases {
  private:
   static constexpr std::uint64_t kNever = ~std::uint64_t(0);
   static constexpr int kSpinsBeforeYield = 4096;
+  static constexpr std::uint64_t kChunkMask = (std::uint64_t(1) << kChunkBits) - 1;
 
   /// The claims word of a phase before any chunk is taken: the phase, then the front and the back
-  /// of its chunks not yet taken, 16 bits each.
+  /// of its chunks not yet taken, kChunkBits each.
   static std::uint64_t openPhase(std::uint64_t phase, std::size_t chunks) {
-    return phase << 32 | std::uint64_t(chunks);
+    return phase << (2 * kChunkBits) | std::uint64_t(chunks);
   }
 
   /// A chunk of `phase` not yet taken, from the front or the back; none when all are taken or the
@@ -88,9 +99,9 @@ class ChunkPhases {
   std::optional<std::size_t> take(std::uint64_t phase, bool fromBack) {
     std::uint64_t word = claims_.load(std::memory_order_relaxed);
     for (;;) {
-      const std::uint64_t front = word >> 16 & 0xffff, back = word & 0xffff;
-      if (word >> 32 != phase || front >= back) return std::nullopt;
-      const std::uint64_t taken = fromBack ? word - 1 : word + (std::uint64_t(1) << 16);
+      const std::uint64_t front = word >> kChunkBits & kChunkMask, back = word & kChunkMask;
+      if (word >> (2 * kChunkBits) != phase || front >= back) return std::nullopt;
+      const std::uint64_t taken = fromBack ? word - 1 : word + (std::uint64_t(1) << kChunkBits);
       if (claims_.compare_exchange_weak(word, taken, std::memory_order_relaxed))
         return std::size_t(fromBack ? back - 1 : front);
     }

@@ -169,7 +169,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   for (Index i : held_) deltaV_[i] = filtered(i, deltaV_[i]) + holdSpeed_[i] * holdNormal_[i];
   enum class Pass { WarmProduct, Residual, ResidualNorm, Product, Update, Direction };
   Pass pass = Pass::WarmProduct;
-  double rz = 0, rhsNorm = 0, tolerance = 0, curvature = 0;
+  double rz = 0, rhsNorm = 0, tolerance = 0;
   Scalar alpha = 0, beta = 0;
   int iteration = 0;
   bool zeroRhs = false;
@@ -244,11 +244,12 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         iteration = 1;
         pass = Pass::Product;
         return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
-      case Pass::Product:
-        curvature = total.first;
+      case Pass::Product: {
+        const double curvature = total.first;
         alpha = Scalar(rz / curvature);
         pass = Pass::Update;
         return curvature > 0;  // else converged to rounding, or a degenerate direction
+      }
       case Pass::Update: {
         stats_.iterations = iteration;
         stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
