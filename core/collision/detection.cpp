@@ -1,6 +1,5 @@
 #include "core/collision/detection.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -11,9 +10,8 @@
 namespace softbake {
 
 namespace {
-constexpr std::size_t kPairGrain = 256;
-/// Chunks of pairs for the particle tests: enough for TBB to balance uneven chunks.
-constexpr std::size_t kParticleChunks = 128;
+/// Chunks of pairs for the narrow phase: enough for TBB to balance uneven chunks.
+constexpr std::size_t kPairChunks = 128;
 
 /// The struck triangle of a particle test, computed once for all the particles tested against it.
 /// The triangle moved too during the substep: a particle's start is shifted by the triangle's own
@@ -37,20 +35,20 @@ struct ParticleTarget {
   Vec3 startCorner, startNormal;  ///< corner 0 and normal at the substep's start (open only)
 };
 
+/// `now` and `normal`: the triangle's corners at the substep's end and their triangleNormal().
 ParticleTarget particleTarget(const CollisionGeometry& geometry, const SubstepMotion& motion,
-                              Index triangle) {
+                              Index triangle, const TriangleCorners& now, const Vec3& normal) {
   const Triangle& t = geometry.triangleVertices[triangle];
   ParticleTarget target{triangle,
-                        geometry.corners(motion.end, triangle),
+                        now,
                         Vec3::Zero(),
-                        Vec3::Zero(),
+                        normal,
                         !geometry.surfaceClosed[geometry.triangleSurface[triangle]],
                         Vec3::Zero(),
                         Vec3::Zero()};
   Vec3 displacement = Vec3::Zero();
   for (int k = 0; k < 3; ++k) displacement += target.now[k] - geometry.vertex(motion.start, t[k]);
   target.shift = displacement / Scalar(3);
-  target.normal = (target.now[1] - target.now[0]).cross(target.now[2] - target.now[0]);
   if (target.open) {
     const TriangleCorners then = geometry.corners(motion.start, triangle);
     target.startCorner = then[0];
@@ -77,10 +75,11 @@ struct ParticleSides {
   Scalar start, end;
 };
 
-ParticleSides particleSides(const SubstepMotion& motion, Index p, const ParticleTarget& target) {
+/// `endSide`: the side of the target's plane p ends on, sidesOfPlane() of its triangle.
+ParticleSides particleSides(const SubstepMotion& motion, Index p, const ParticleTarget& target,
+                            Scalar endSide) {
   const Vec3 start = motion.start[p] + target.shift;
-  return {target.normal.dot(start - target.now[0]),
-          target.normal.dot(motion.end[p] - target.now[0])};
+  return {target.normal.dot(start - target.now[0]), endSide};
 }
 
 /// False when particle p's shifted motion stays strictly on one side of the target's plane (or on
@@ -169,44 +168,25 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
     broadPhase_->findPairs(geometry.broadPhaseInput(boxes_), pairs_);
   dropIgnoredPairs(geometry, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
-  findEdgeContacts(geometry, motion.end);
-  findParticleContacts(topology, motion);
+  findContacts(topology, motion);
   if (clock) clock->lap(Stage::NarrowPhase);
 }
 
-/// The multi-pass test on every candidate pair, one slot per pair.
-void CollisionDetector::findEdgeContacts(const CollisionGeometry& geometry,
-                                         std::span<const Vec3> positions) {
-  pairHits_.resize(pairs_.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs_.size(), kPairGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i)
-                        intersectTrianglePair(geometry.corners(positions, pairs_[i].first),
-                                              geometry.corners(positions, pairs_[i].second),
-                                              pairHits_[i]);
-                    });
-  edgeContacts_.clear();
-  for (std::size_t i = 0; i < pairs_.size(); ++i) {
-    const TrianglePairHits& hits = pairHits_[i];
-    for (int k = 0; k < hits.firstCount; ++k)
-      edgeContacts_.push_back(
-          {pairs_[i].first, pairs_[i].second, hits.firstEdges[k].edge, hits.firstEdges[k].hit});
-    for (int k = 0; k < hits.secondCount; ++k)
-      edgeContacts_.push_back(
-          {pairs_[i].second, pairs_[i].first, hits.secondEdges[k].edge, hits.secondEdges[k].hit});
-  }
-}
-
-void CollisionDetector::findParticleContacts(const SceneTopology& topology,
-                                             const SubstepMotion& motion) {
+void CollisionDetector::findContacts(const SceneTopology& topology, const SubstepMotion& motion) {
   const CollisionGeometry& geometry = topology.collision;
-  // Every free particle of one triangle of a pair against the other triangle.
+  // Per pair, both tests at once: the multi-pass test on the two triangles (edge contacts), and
+  // every free particle of one triangle against the other (particle contacts). Both start from
+  // the triangles' normals and the sides of each one's corners of the other's plane, computed
+  // once here. A particle can only enter a closed surface by ending behind the face, so where no
+  // corner does, as in most pairs, nothing more is computed for that direction.
+  //
   // A particle belongs to several triangles, so the same (particle, triangle) comes from several
   // pairs. It is tested once, from the first triangle of the particle's incidence row that the
   // broad phase pairs with the target: every broad phase lists exactly the eligible pairs whose
   // boxes overlap, so that triangle is known locally, by a few box tests, with no sort of all
   // candidates (that was a quarter of a contact-heavy step). The pairs are tested in parallel
-  // chunks, and only the few hits are sorted, so the result is the same for any thread count.
+  // chunks whose hits are joined in chunk order, and only the few particle hits are sorted, so
+  // the result is the same for any thread count.
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
   const auto testsFrom = [&](Index from, Index p, Index against) {
     const Box3& target = boxes_[against];
@@ -221,20 +201,30 @@ void CollisionDetector::findParticleContacts(const SceneTopology& topology,
     }
     return false;
   };
-  const std::size_t chunks = std::min(kParticleChunks, pairs_.size());
+  const std::size_t chunks = std::min(kPairChunks, pairs_.size());
   const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
   if (chunkHits_.size() < chunks) chunkHits_.resize(chunks);
+  if (chunkEdges_.size() < chunks) chunkEdges_.resize(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<ParticleContact>& hits = chunkHits_[chunk];
+    std::vector<EdgeContact>& edges = chunkEdges_[chunk];
     hits.clear();
+    edges.clear();
     ParticleContact contact;
-    auto testCorners = [&](Index from, Index against) {
+    // The corners of `from` against `against`, whose corners at the end are `struckNow`.
+    const auto testCorners = [&](Index from, Index against, const TriangleCorners& struckNow,
+                                 const Vec3& struckNormal, const std::array<Scalar, 3>& endSides) {
       if (!geometry.surfaces[geometry.triangleSurface[from]].moving) return;
+      const bool closed = geometry.surfaceClosed[geometry.triangleSurface[against]];
+      if (closed && !(endSides[0] < 0 || endSides[1] < 0 || endSides[2] < 0)) return;
       const Triangle& struck = geometry.triangleVertices[against];
-      const ParticleTarget target = particleTarget(geometry, motion, against);
-      for (Index p : geometry.triangleVertices[from]) {
+      const ParticleTarget target =
+          particleTarget(geometry, motion, against, struckNow, struckNormal);
+      for (int k = 0; k < 3; ++k) {
+        const Index p = geometry.triangleVertices[from][k];
         if (topology.inverseMass[p] == 0 || hasVertex(struck, p)) continue;
-        const ParticleSides sides = particleSides(motion, p, target);
+        if (closed && !(endSides[k] < 0)) continue;  // testParticle() would find no entry
+        const ParticleSides sides = particleSides(motion, p, target, endSides[k]);
         if (mayCross(motion, p, target, sides) && testsFrom(from, p, against) &&
             testParticle(geometry, motion, p, target, sides, contact))
           hits.push_back(contact);
@@ -242,10 +232,27 @@ void CollisionDetector::findParticleContacts(const SceneTopology& topology,
     };
     const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
     for (std::size_t i = chunk * perChunk; i < stop; ++i) {
-      testCorners(pairs_[i].first, pairs_[i].second);
-      testCorners(pairs_[i].second, pairs_[i].first);
+      const Index first = pairs_[i].first, second = pairs_[i].second;
+      const TriangleCorners a = geometry.corners(motion.end, first);
+      const TriangleCorners b = geometry.corners(motion.end, second);
+      const Vec3 normalA = triangleNormal(a), normalB = triangleNormal(b);
+      const std::array<Scalar, 3> sidesOfA = sidesOfPlane(a, b, normalB);
+      const std::array<Scalar, 3> sidesOfB = sidesOfPlane(b, a, normalA);
+      std::array<EdgeHit, 2> edgeHits;
+      const int firstCount = intersectEdgesWithTriangle(a, normalA, b, normalB, sidesOfA, edgeHits);
+      for (int k = 0; k < firstCount; ++k)
+        edges.push_back({first, second, edgeHits[k].edge, edgeHits[k].hit});
+      const int secondCount =
+          intersectEdgesWithTriangle(b, normalB, a, normalA, sidesOfB, edgeHits);
+      for (int k = 0; k < secondCount; ++k)
+        edges.push_back({second, first, edgeHits[k].edge, edgeHits[k].hit});
+      testCorners(first, second, b, normalB, sidesOfA);
+      testCorners(second, first, a, normalA, sidesOfB);
     }
   });
+  edgeContacts_.clear();
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+    edgeContacts_.insert(edgeContacts_.end(), chunkEdges_[chunk].begin(), chunkEdges_[chunk].end());
   particleContacts_.clear();
   for (std::size_t chunk = 0; chunk < chunks; ++chunk)
     particleContacts_.insert(particleContacts_.end(), chunkHits_[chunk].begin(),

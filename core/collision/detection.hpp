@@ -3,9 +3,10 @@
 /// the multi-pass line–triangle test on each pair (edge contacts) and on each particle's segment
 /// against the triangles its own triangles were paired with (particle contacts).
 ///
-/// Every stage writes into its own slot per pair or per candidate, and the results are kept in
-/// the broad phase's sorted order, so the output is the same for any thread count and any broad
-/// phase. Buffers keep their capacity: a warmed-up substep allocates nothing.
+/// Both tests run in one pass over the pairs, which share each pair's normals and corner sides.
+/// Every chunk of pairs writes into its own buffers, joined in chunk order, and the results are
+/// kept in the broad phase's sorted order, so the output is the same for any thread count and any
+/// broad phase. Buffers keep their capacity: a warmed-up substep allocates nothing.
 
 #include <memory>
 #include <optional>
@@ -75,8 +76,7 @@ class CollisionDetector {
   std::span<const Box3> triangleBoxes() const { return boxes_; }
 
  private:
-  void findEdgeContacts(const CollisionGeometry& geometry, std::span<const Vec3> positions);
-  void findParticleContacts(const SceneTopology& topology, const SubstepMotion& motion);
+  void findContacts(const SceneTopology& topology, const SubstepMotion& motion);
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of
@@ -84,8 +84,8 @@ class CollisionDetector {
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;
   std::vector<std::pair<Index, Index>> ignoredSurfaces_;  ///< surface pairs that overlapped, sorted
-  std::vector<TrianglePairHits> pairHits_;
-  std::vector<std::vector<ParticleContact>> chunkHits_;  ///< particle hits, per chunk of pairs
+  std::vector<std::vector<ParticleContact>> chunkHits_;   ///< particle hits, per chunk of pairs
+  std::vector<std::vector<EdgeContact>> chunkEdges_;      ///< edge hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;
   std::vector<ParticleContact> particleContacts_;
 };

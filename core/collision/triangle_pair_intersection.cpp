@@ -4,21 +4,24 @@ namespace softbake {
 
 int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const TriangleCorners& face,
                                std::array<EdgeHit, 2>& hits) {
+  const Vec3 faceNormal = triangleNormal(face);
+  return intersectEdgesWithTriangle(edgeTriangle, triangleNormal(edgeTriangle), face, faceNormal,
+                                    sidesOfPlane(edgeTriangle, face, faceNormal), hits);
+}
+
+int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const Vec3& edgeNormal,
+                               const TriangleCorners& face, const Vec3& faceNormal,
+                               const std::array<Scalar, 3>& side, std::array<EdgeHit, 2>& hits) {
   // All three corners strictly on one side of the face's plane: no edge can cross it. The sides
   // are computed exactly as intersectSegmentTriangle computes them, so this only skips tests that
   // would fail; most broad-phase pairs are near misses and end here. The segment tests take them
   // as their edges' ends' sides.
-  const Vec3 faceNormal = (face[1] - face[0]).cross(face[2] - face[0]);
-  const std::array<Scalar, 3> side{faceNormal.dot(edgeTriangle[0] - face[0]),
-                                   faceNormal.dot(edgeTriangle[1] - face[0]),
-                                   faceNormal.dot(edgeTriangle[2] - face[0])};
   if ((side[0] > 0 && side[1] > 0 && side[2] > 0) || (side[0] < 0 && side[1] < 0 && side[2] < 0))
     return 0;
   // A zero-area edge triangle lies on one line, and its longest edge covers the other two: testing
   // all three would report one crossing up to three times, at points a rounding error apart.
   int firstEdge = 0, passes = 3;
-  const Vec3 normal = (edgeTriangle[1] - edgeTriangle[0]).cross(edgeTriangle[2] - edgeTriangle[0]);
-  if (normal == Vec3::Zero()) {
+  if (edgeNormal == Vec3::Zero()) {
     passes = 1;
     Scalar longest = -1;
     for (int edge = 0; edge < 3; ++edge) {

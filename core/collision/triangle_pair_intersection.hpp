@@ -45,6 +45,25 @@ struct EdgeHit {
 int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const TriangleCorners& face,
                                std::array<EdgeHit, 2>& hits);
 
+/// A triangle's normal, unnormalised, as every test here computes it: (b − a) × (c − a).
+inline Vec3 triangleNormal(const TriangleCorners& t) {
+  return (t[1] - t[0]).cross(t[2] - t[0]);
+}
+
+/// The side of the face's plane each corner lies on: faceNormal · (corner − face[0]).
+inline std::array<Scalar, 3> sidesOfPlane(const TriangleCorners& corners,
+                                          const TriangleCorners& face, const Vec3& faceNormal) {
+  return {faceNormal.dot(corners[0] - face[0]), faceNormal.dot(corners[1] - face[0]),
+          faceNormal.dot(corners[2] - face[0])};
+}
+
+/// The same test from what a caller has already computed: both triangles' triangleNormal() and
+/// the edge triangle's corners' sidesOfPlane() of the face. The narrow phase computes them once per
+/// pair for this test and for its particles' segments; the result is the same, bit for bit.
+int intersectEdgesWithTriangle(const TriangleCorners& edgeTriangle, const Vec3& edgeNormal,
+                               const TriangleCorners& face, const Vec3& faceNormal,
+                               const std::array<Scalar, 3>& sides, std::array<EdgeHit, 2>& hits);
+
 /// Both directions: `firstEdges` are edges of `first` through `second`, `secondEdges` edges of
 /// `second` through `first`. True when any hit was found: the triangles intersect.
 struct TrianglePairHits {

@@ -7,6 +7,9 @@
 
 #include <cstdio>
 #include <cstring>
+#include <random>
+#include <set>
+#include <tuple>
 
 #include "core/collision/detection.hpp"
 #include "core/collision/response.hpp"
@@ -196,6 +199,77 @@ TEST(CollisionResponse, ParticleLeavingAClosedBodyIsNotPushedBackIn) {
       collideOnce(staged, end, Vec3(0, 5, 0), ResponseMode::Paper);
   EXPECT_EQ(findParticleContact(contacts, 0), nullptr);
   EXPECT_EQ(staged.state.position[0], end);
+}
+
+TEST(CollisionDetection, FindsExactlyTheCrossingsABruteForceScanFinds) {
+  // Two closed balls that touch at the start close on each other by 0.05 each, with every particle
+  // jittered, so that hundreds of particles end inside the other ball and its edges cross the
+  // other's faces. The reference tests every particle against every triangle of the other ball,
+  // and every triangle pair, with no broad phase and none of the detector's shortcuts: the same
+  // segment test, the struck triangle's centroid shift, and "only entering counts" for a closed
+  // surface.
+  SceneSetup setup;
+  setup.settings.gravity.setZero();
+  setup.settings.skin = Scalar(0.12);  // boxes grown past the shift: the broad phase misses none
+  for (int side : {-1, 1}) {
+    BodySetup body;
+    body.name = side < 0 ? "left" : "right";
+    body.mesh = makeIcosphere(3, 0.5f, Vec3f(0.5f * float(side), 0.01f * float(side), 0));
+    body.material = *findMaterialPreset("rubber");
+    body.selfCollision = false;
+    setup.bodies.push_back(body);
+  }
+  test::StagedScene scene(buildSceneTopology(setup));
+  const CollisionGeometry& geometry = scene.topology.collision;
+  ASSERT_TRUE(geometry.surfaceClosed[0] && geometry.surfaceClosed[1]);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> jitter(-0.004f, 0.004f);
+  for (Index i = 0; i < scene.topology.particleCount(); ++i) {
+    const Scalar towardTheOther = scene.topology.particleBody[i] == 0 ? 0.05f : -0.05f;
+    scene.state.position[i] +=
+        Vec3(towardTheOther + jitter(random), jitter(random), jitter(random));
+  }
+  CollisionDetector detector(scene.topology.settings.collisions);
+  detector.detect(scene.topology, {scene.substepStart, scene.state.position});
+
+  const std::span<const Vec3> start = scene.substepStart, end = scene.state.position;
+  std::set<std::pair<Index, Index>> expectedEntries;
+  std::set<std::tuple<Index, Index, int>> expectedEdges;
+  const Index triangles = Index(geometry.triangleVertices.size());
+  for (Index t = 0; t < triangles; ++t) {
+    const Triangle& struck = geometry.triangleVertices[t];
+    const TriangleCorners now = geometry.corners(end, t);
+    Vec3 shift = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) shift += now[k] - start[struck[k]];
+    shift /= Scalar(3);
+    const Vec3 normal = (now[1] - now[0]).cross(now[2] - now[0]);
+    for (Index p = 0; p < scene.topology.particleCount(); ++p) {
+      if (scene.topology.particleBody[p] == geometry.triangleSurface[t]) continue;
+      const Vec3 from = start[p] + shift;
+      SegmentTriangleHit hit;
+      if (intersectSegmentTriangle(from, end[p], now[0], now[1], now[2], hit) &&
+          normal.dot(from - now[0]) >= 0 && normal.dot(end[p] - now[0]) < 0)
+        expectedEntries.insert({p, t});
+    }
+    for (Index u = 0; u < triangles; ++u) {
+      if (geometry.triangleSurface[u] == geometry.triangleSurface[t]) continue;
+      std::array<EdgeHit, 2> hits;
+      const int count = intersectEdgesWithTriangle(geometry.corners(end, u), now, hits);
+      for (int k = 0; k < count; ++k) expectedEdges.insert({u, t, hits[k].edge});
+    }
+  }
+  std::set<std::pair<Index, Index>> foundEntries;
+  for (const ParticleContact& contact : detector.particleContacts())
+    EXPECT_TRUE(foundEntries.insert({contact.particle, contact.triangle}).second)
+        << "particle " << contact.particle << " against triangle " << contact.triangle
+        << " reported twice";
+  std::set<std::tuple<Index, Index, int>> foundEdges;
+  for (const EdgeContact& contact : detector.edgeContacts())
+    foundEdges.insert({contact.edgeTriangle, contact.triangle, contact.edge});
+  EXPECT_GT(expectedEntries.size(), 50u) << "the balls must overlap for the test to mean anything";
+  EXPECT_GT(expectedEdges.size(), 100u);
+  EXPECT_EQ(foundEntries, expectedEntries);
+  EXPECT_EQ(foundEdges, expectedEdges);
 }
 
 /// Σ m·v and Σ m·x over every particle, in double.
