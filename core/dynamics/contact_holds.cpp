@@ -1,6 +1,12 @@
 #include "core/dynamics/contact_holds.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <functional>
+
 #include "core/collision/plane_contact.hpp"
+#include "core/dynamics/for_each_particle.hpp"
 
 namespace softbake {
 
@@ -27,11 +33,12 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
   solver.releaseHolds();
   const Scalar skin = topology_.settings.skin;
   const std::span<const Vec3> lastChange = solver.warmStart();
+  const Index n = Index(touchedPlane_.size());
   // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is expected.
-  expect = expect && topology_.settings.collisions.response != ResponseMode::None;
-  for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
-    if (expect) expected_[i] = 0;
-    if (expect && touchedPlane_[i] == kNoPlane && topology_.inverseMass[i] != 0) {
+  if (expect && topology_.settings.collisions.response != ResponseMode::None)
+    forEachParticle(n, [&](Index i) {
+      expected_[i] = 0;
+      if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) return;
       // Held from the start when its velocity, changed as the last step changed it, takes it
       // into the skin: then the step is not taken again for it (catchImpacts()), which figure 7
       // did in three steps of five, mostly for one or two particles at the edge of a contact.
@@ -44,10 +51,12 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
             approach <= kLongestExpectedApproachInSkins * skin) {
           touchedPlane_[i] = std::int32_t(p);
           expected_[i] = 1;
-          break;
+          return;
         }
       }
-    }
+    });
+  // In particle order, one thread: the solver's list of holds is in that order on any thread count.
+  for (Index i = 0; i < n; ++i) {
     if (touchedPlane_[i] == kNoPlane) continue;
     heldPlane_[i] = touchedPlane_[i];
     const PlaneCollider& plane = topology_.planes[touchedPlane_[i]];
@@ -58,19 +67,22 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
 }
 
 std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
-  std::size_t caught = 0;
   const Scalar skin = topology_.settings.skin;
-  for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
-    if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
-    for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
-      const PlaneCollider& plane = topology_.planes[p];
-      if (!touchesPlane(plane, skin, state.position[i])) continue;
-      touchedPlane_[i] = std::int32_t(p);
-      ++caught;
-      break;
-    }
-  }
-  return caught;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<Index>(0, Index(touchedPlane_.size()), kParticleGrain), std::size_t(0),
+      [&](const tbb::blocked_range<Index>& range, std::size_t caught) {
+        for (Index i = range.begin(); i != range.end(); ++i) {
+          if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
+          for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
+            if (!touchesPlane(topology_.planes[p], skin, state.position[i])) continue;
+            touchedPlane_[i] = std::int32_t(p);
+            ++caught;
+            break;
+          }
+        }
+        return caught;
+      },
+      std::plus<>());
 }
 
 std::size_t ContactHolds::dropWrongExpectations(const ImplicitEuler& solver) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <tuple>
 
+#include "core/dynamics/for_each_particle.hpp"
 #include "core/dynamics/integrator.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
@@ -15,20 +16,10 @@
 namespace softbake {
 
 namespace {
-constexpr std::size_t kParticleGrain = 2048;
 /// Particles per chunk of the fused CG passes: the chunks, not the threads, fix the summation
 /// order; small enough that two threads share the work of a 5 000-particle scene evenly (ten
 /// chunks; at 1 024 the six were split three to two, and figure 7 ran 5% slower).
 constexpr std::size_t kChunk = 512;
-
-/// Runs body(i) for every particle in parallel.
-template <class Body>
-void forEachParticle(std::size_t count, const Body& body) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kParticleGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) body(Index(i));
-                    });
-}
 
 double dot(const Vec3& a, const Vec3& b) {
   return double(a.x()) * b.x() + double(a.y()) * b.y() + double(a.z()) * b.z();

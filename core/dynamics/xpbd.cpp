@@ -6,23 +6,15 @@
 #include <algorithm>
 #include <atomic>
 
+#include "core/dynamics/for_each_particle.hpp"
 #include "core/dynamics/integrator.hpp"
 
 namespace softbake {
 
 namespace {
 
-constexpr std::size_t kParticleGrain = 2048;
 constexpr std::size_t kConstraintGrain = 1024;
 constexpr std::size_t kTriangleGrain = 2048;
-
-template <class PerParticle>
-void forEachParticle(std::size_t count, const PerParticle& perParticle) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kParticleGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) perParticle(i);
-                    });
-}
 
 /// Greedy first-fit colouring in spring order: each spring takes the smallest colour that no
 /// spring already coloured at either of its ends has. Uses at most 2·(largest degree) − 1 colours,
