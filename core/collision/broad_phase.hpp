@@ -22,6 +22,15 @@ namespace softbake {
 
 using Box3 = Eigen::AlignedBox<Scalar, 3>;
 
+/// AlignedBox::intersects() with & instead of &&: one branch for the caller instead of up to six.
+/// The broad and narrow phases test boxes by the thousand a step, with outcomes in no pattern a
+/// branch predictor learns. The same answer, NaN included.
+inline bool overlaps(const Box3& a, const Box3& b) {
+  return bool(unsigned(a.min().x() <= b.max().x()) & unsigned(a.min().y() <= b.max().y()) &
+              unsigned(a.min().z() <= b.max().z()) & unsigned(b.min().x() <= a.max().x()) &
+              unsigned(b.min().y() <= a.max().y()) & unsigned(b.min().z() <= a.max().z()));
+}
+
 /// A soft body or a static mesh: a contiguous range of collision triangles.
 struct CollisionSurface {
   Index firstTriangle = 0, triangleCount = 0;

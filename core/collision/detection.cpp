@@ -194,7 +194,7 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
       const Index u = topology.triangleRefs[r];
       if (u == from) return true;  // paired with `against`: that is how we got here
       // u's surface is from's, which moves, so a pair with another surface is always eligible.
-      if (boxes_[u].intersects(target) &&
+      if (overlaps(boxes_[u], target) &&
           (geometry.triangleSurface[u] != geometry.triangleSurface[against] ||
            pairEligible(input, u, against)))
         return false;

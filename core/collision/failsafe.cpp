@@ -199,7 +199,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
           const Index p = geometry.triangleVertices[from][k];
           if ((!everyPrimitive && !(owns_[from] & (1u << k))) || hasVertex(f, p)) continue;
           if (p >= particles && f[0] >= particles) continue;  // static against static
-          if (!pathBox(p).intersects(boxes_[face])) continue;
+          if (!overlaps(pathBox(p), boxes_[face])) continue;
           const std::optional<Impact> impact = vertexFaceImpact(
               path(geometry, start, end, p), path(geometry, start, end, f[0]),
               path(geometry, start, end, f[1]), path(geometry, start, end, f[2]), tolerance);
@@ -219,7 +219,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
           if (!(mask & (1u << k))) continue;
           box[k] = pathBox(corners[k]);
           box[k].extend(pathBox(corners[(k + 1) % 3]));
-          if (!box[k].intersects(boxes_[other])) mask &= ~(1u << k);
+          if (!overlaps(box[k], boxes_[other])) mask &= ~(1u << k);
         }
         return mask;
       };
@@ -232,7 +232,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
         // meeting found from two pairs is then the same computation, bit for bit.
         const Index p0 = std::min(a[j], a[(j + 1) % 3]), p1 = std::max(a[j], a[(j + 1) % 3]);
         for (int k = 0; k < 3; ++k) {
-          if (!(edgesB & (1u << k)) || !boxA[j].intersects(boxB[k])) continue;
+          if (!(edgesB & (1u << k)) || !overlaps(boxA[j], boxB[k])) continue;
           const Index q0 = std::min(b[k], b[(k + 1) % 3]), q1 = std::max(b[k], b[(k + 1) % 3]);
           if (p0 == q0 || p0 == q1 || p1 == q0 || p1 == q1) continue;
           std::array<Index, 4> v =

@@ -78,15 +78,8 @@ void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& 
     std::size_t kept = 0;
     for (std::size_t i = begin; i < end; ++i) {
       const TrianglePair pair = cached_[i];
-      const Box3& a = box[pair.first];
-      const Box3& b = box[pair.second];
-      // AlignedBox::intersects(), with & instead of &&.
-      const unsigned overlap =
-          unsigned(a.min().x() <= b.max().x()) & unsigned(a.min().y() <= b.max().y()) &
-          unsigned(a.min().z() <= b.max().z()) & unsigned(b.min().x() <= a.max().x()) &
-          unsigned(b.min().y() <= a.max().y()) & unsigned(b.min().z() <= a.max().z());
       out[kept] = pair;
-      kept += overlap;
+      kept += unsigned(overlaps(box[pair.first], box[pair.second]));
     }
     out.resize(kept);
   });
