@@ -85,6 +85,17 @@ class BroadPhase {
   /// Replaces `pairs` with this step's candidate pairs (see the file comment). Buffers inside the
   /// broad phase and `pairs` keep their capacity, so a warmed-up step allocates nothing.
   virtual void findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) = 0;
+  /// Replaces `pairs` with the pairs findPairs would list that have at least one triangle in
+  /// `triangles` (ascending), sorted and unique, for a caller that knows the other pairs already
+  /// (the pair cache, when a few triangles left their grown boxes). Of everything the latest call
+  /// (this or findPairs) saw, only the boxes of `triangles` may differ. False where this broad
+  /// phase cannot answer for a few triangles alone, or saw no findPairs call on these surfaces;
+  /// the caller then runs findPairs.
+  virtual bool findPairsInvolving(const BroadPhaseInput& input, std::span<const Index> triangles,
+                                  std::vector<TrianglePair>& pairs) {
+    (void)input, (void)triangles, (void)pairs;
+    return false;
+  }
   virtual BroadPhaseKind kind() const = 0;
 };
 
@@ -108,10 +119,13 @@ inline void addIfCandidate(const BroadPhaseInput& input, Index i, Index j,
 struct CachedSurface {
   Index firstTriangle = 0, triangleCount = 0;
   bool moving = true;
+  bool covers(const CollisionSurface& given) const {
+    return firstTriangle == given.firstTriangle && triangleCount == given.triangleCount &&
+           moving == given.moving;
+  }
   /// Takes over `given`; true when it differs from the surface cached so far.
   bool adopt(const CollisionSurface& given) {
-    const bool changed = firstTriangle != given.firstTriangle ||
-                         triangleCount != given.triangleCount || moving != given.moving;
+    const bool changed = !covers(given);
     firstTriangle = given.firstTriangle;
     triangleCount = given.triangleCount;
     moving = given.moving;

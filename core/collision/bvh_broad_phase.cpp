@@ -25,6 +25,8 @@ namespace {
 constexpr std::size_t kTargetTasks = 256;
 constexpr int kMaxExpansionRounds = 32;
 constexpr std::size_t kMaxChunks = 256;
+/// Triangles per chunk of findPairsInvolving, at least: each descends every tree it may meet.
+constexpr std::size_t kQueryGrain = 64;
 
 double area(const Box3& box) {
   if (box.isEmpty()) return 0;
@@ -34,13 +36,7 @@ double area(const Box3& box) {
 
 }  // namespace
 
-void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
-  // Trees follow the surfaces; one whose triangles or kind changed is rebuilt.
-  trees_.resize(input.surfaces.size());
-  for (std::size_t s = 0; s < trees_.size(); ++s) {
-    Tree& tree = trees_[s];
-    if (tree.adopt(input.surfaces[s])) tree.built = false;
-  }
+void BvhBroadPhase::refitOrRebuild(const BroadPhaseInput& input) {
   rebuilt_.assign(trees_.size(), 0);
   tbb::parallel_for(std::size_t(0), trees_.size(), [&](std::size_t s) {
     Tree& tree = trees_[s];
@@ -49,6 +45,26 @@ void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<Triangle
       rebuilt_[s] = 1;
     }
   });
+}
+
+void BvhBroadPhase::updateStats() {
+  stats_.nodes = 0;
+  stats_.rebuilds = 0;
+  for (std::size_t s = 0; s < trees_.size(); ++s) {
+    stats_.nodes += trees_[s].nodes.size();
+    stats_.rebuilds += std::size_t(rebuilt_[s]);
+  }
+  stats_.totalRebuilds += stats_.rebuilds;
+}
+
+void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+  // Trees follow the surfaces; one whose triangles or kind changed is rebuilt.
+  trees_.resize(input.surfaces.size());
+  for (std::size_t s = 0; s < trees_.size(); ++s) {
+    Tree& tree = trees_[s];
+    if (tree.adopt(input.surfaces[s])) tree.built = false;
+  }
+  refitOrRebuild(input);
 
   tasks_.clear();
   for (Index s = 0; s < trees_.size(); ++s) {
@@ -97,15 +113,105 @@ void BvhBroadPhase::findPairs(const BroadPhaseInput& input, std::vector<Triangle
     }
   });
   buffers_.mergeInto(pairs);
-
-  stats_.nodes = 0;
-  stats_.rebuilds = 0;
-  for (std::size_t s = 0; s < trees_.size(); ++s) {
-    stats_.nodes += trees_[s].nodes.size();
-    stats_.rebuilds += std::size_t(rebuilt_[s]);
-  }
-  stats_.totalRebuilds += stats_.rebuilds;
+  updateStats();
   stats_.tasks = tasks_.size();
+}
+
+bool BvhBroadPhase::findPairsInvolving(const BroadPhaseInput& input,
+                                       std::span<const Index> triangles,
+                                       std::vector<TrianglePair>& pairs) {
+  if (trees_.size() != input.surfaces.size()) return false;
+  for (std::size_t s = 0; s < trees_.size(); ++s)
+    if (!trees_[s].built || !trees_[s].covers(input.surfaces[s])) return false;
+  // The triangles ascend, so each surface's are a run; its tree takes them in alone.
+  runs_.assign(trees_.size() + 1, triangles.size());
+  for (std::size_t k = triangles.size(); k-- > 0;) runs_[input.triangleSurface[triangles[k]]] = k;
+  for (std::size_t s = trees_.size(); s-- > 0;) runs_[s] = std::min(runs_[s], runs_[s + 1]);
+  rebuilt_.assign(trees_.size(), 0);
+  tbb::parallel_for(std::size_t(0), trees_.size(), [&](std::size_t s) {
+    if (runs_[s] < runs_[s + 1])
+      takeIn(input, triangles.subspan(runs_[s], runs_[s + 1] - runs_[s]), trees_[s], rebuilt_[s]);
+  });
+
+  // Chunks by count alone, so the buffers, and the order before the sort, do not depend on the
+  // thread count.
+  const std::size_t chunks =
+      std::min(kMaxChunks, (triangles.size() + kQueryGrain - 1) / kQueryGrain);
+  buffers_.reset(chunks);
+  if (queryStacks_.size() < chunks) queryStacks_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<TrianglePair>& out = buffers_[chunk];
+    const std::size_t begin = triangles.size() * chunk / chunks;
+    const std::size_t end = triangles.size() * (chunk + 1) / chunks;
+    // Triangles ascend, so those of one surface come in a run. A tree is descended for the run's
+    // triangles only when its root meets the box around all of them: most trees are far away.
+    for (std::size_t runStart = begin; runStart < end;) {
+      const Index surface = input.triangleSurface[triangles[runStart]];
+      std::size_t runEnd = runStart;
+      Box3 around;
+      for (; runEnd < end && input.triangleSurface[triangles[runEnd]] == surface; ++runEnd)
+        around.extend(input.triangleBox[triangles[runEnd]]);
+      for (std::size_t s = 0; s < trees_.size(); ++s) {
+        const bool mayMeet = s == surface
+                                 ? input.surfaces[s].selfCollision
+                                 : input.surfaces[s].moving || input.surfaces[surface].moving;
+        if (!mayMeet || trees_[s].nodes.empty() || !overlaps(trees_[s].nodes[0].box, around))
+          continue;
+        for (std::size_t k = runStart; k < runEnd; ++k)
+          query(input, triangles[k], trees_[s], queryStacks_[chunk], out);
+      }
+      runStart = runEnd;
+    }
+  });
+  buffers_.mergeInto(pairs);  // a pair of two given triangles was found from both: once now
+  updateStats();
+  stats_.tasks = 0;
+  return true;
+}
+
+void BvhBroadPhase::takeIn(const BroadPhaseInput& input, std::span<const Index> triangles,
+                           Tree& tree, char& rebuilt) {
+  // A box taken in widens its leaf and the ancestors that do not hold it yet, so the tree stays a
+  // true bound. Boxes only grow that way: a tree that has taken in a quarter of its triangles
+  // since its latest refit is refitted instead (and rebuilt if that leaves it loose).
+  tree.takenIn += Index(triangles.size());
+  if (tree.takenIn > tree.triangleCount / 4) {
+    if (refit(input, tree) > kRebuildFactor * tree.looseness) {
+      build(input, tree);
+      rebuilt = 1;
+    }
+    return;
+  }
+  for (Index triangle : triangles) {
+    const Box3& box = input.triangleBox[triangle];
+    for (Index node = tree.leafOf[triangle - tree.firstTriangle];; node = tree.parent[node]) {
+      if (tree.nodes[node].box.contains(box)) break;
+      tree.nodes[node].box.extend(box);
+      if (node == 0) break;
+    }
+  }
+}
+
+void BvhBroadPhase::query(const BroadPhaseInput& input, Index triangle, const Tree& tree,
+                          std::vector<Index>& stack, std::vector<TrianglePair>& out) const {
+  if (tree.nodes.empty()) return;
+  const Box3& box = input.triangleBox[triangle];
+  stack.clear();
+  stack.push_back(0);
+  while (!stack.empty()) {
+    const Index n = stack.back();
+    stack.pop_back();
+    const Node& node = tree.nodes[n];
+    if (!overlaps(node.box, box)) continue;
+    if (node.leaf()) {
+      for (Index k = node.start; k < node.start + node.count; ++k)
+        if (tree.order[k] != triangle)
+          broad_phase_detail::addIfCandidate(input, triangle, tree.order[k], out);
+    } else {
+      stack.push_back(node.right);
+      stack.push_back(n + 1);
+    }
+  }
 }
 
 void BvhBroadPhase::build(const BroadPhaseInput& input, Tree& tree) {
@@ -113,14 +219,19 @@ void BvhBroadPhase::build(const BroadPhaseInput& input, Tree& tree) {
   tree.order.resize(tree.triangleCount);
   tree.key.resize(tree.triangleCount);
   for (Index k = 0; k < tree.triangleCount; ++k) tree.order[k] = tree.firstTriangle + k;
-  if (tree.triangleCount > 0) buildNode(input, tree, 0, tree.triangleCount);
+  tree.parent.clear();
+  tree.leafOf.resize(tree.triangleCount);
+  tree.takenIn = 0;
+  if (tree.triangleCount > 0) buildNode(input, tree, 0, tree.triangleCount, 0);
   tree.looseness = looseness(tree);
   tree.built = true;
 }
 
-Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index begin, Index end) {
+Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index begin, Index end,
+                               Index parent) {
   const Index node = Index(tree.nodes.size());
   tree.nodes.emplace_back();  // children follow: `tree.nodes` may move, so no reference is kept
+  tree.parent.push_back(parent);
   Box3 box, centers;
   for (Index k = begin; k < end; ++k) {
     const Box3& triangle = input.triangleBox[tree.order[k]];
@@ -131,6 +242,7 @@ Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index b
     tree.nodes[node].box = box;
     tree.nodes[node].start = begin;
     tree.nodes[node].count = end - begin;
+    for (Index k = begin; k < end; ++k) tree.leafOf[tree.order[k] - tree.firstTriangle] = node;
     return node;
   }
   // Median split on the longest axis of the centres: halves by count, so the depth is log2(n)
@@ -148,14 +260,15 @@ Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index b
                      const Scalar kb = tree.key[b - tree.firstTriangle];
                      return ka < kb || (ka == kb && a < b);
                    });
-  buildNode(input, tree, begin, mid);
-  const Index right = buildNode(input, tree, mid, end);
+  buildNode(input, tree, begin, mid, node);
+  const Index right = buildNode(input, tree, mid, end, node);
   tree.nodes[node].box = box;
   tree.nodes[node].right = right;
   return node;
 }
 
 double BvhBroadPhase::refit(const BroadPhaseInput& input, Tree& tree) {
+  tree.takenIn = 0;
   // Children come after their parent, so one backward sweep sees every child before its parent.
   for (std::size_t n = tree.nodes.size(); n-- > 0;) {
     Node& node = tree.nodes[n];

@@ -27,6 +27,10 @@ class BvhBroadPhase final : public BroadPhase {
   static constexpr double kRebuildFactor = 2;
 
   void findPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) override;
+  /// Refits the trees (rebuilding loose ones, as findPairs does), then descends every tree the
+  /// triangle may meet with each given triangle's box.
+  bool findPairsInvolving(const BroadPhaseInput& input, std::span<const Index> triangles,
+                          std::vector<TrianglePair>& pairs) override;
   BroadPhaseKind kind() const override { return BroadPhaseKind::Bvh; }
 
   const BvhStats& lastStats() const { return stats_; }
@@ -45,8 +49,12 @@ class BvhBroadPhase final : public BroadPhase {
     bool built = false;
     double looseness = 0;  ///< at the latest build
     std::vector<Node> nodes;
-    std::vector<Index> order;  ///< triangle ids, leaf by leaf
-    std::vector<Scalar> key;   ///< scratch for the build: centroids along the split axis
+    std::vector<Index> order;   ///< triangle ids, leaf by leaf
+    std::vector<Scalar> key;    ///< scratch for the build: centroids along the split axis
+    std::vector<Index> parent;  ///< per node (the root's is itself)
+    std::vector<Index> leafOf;  ///< per triangle of the surface: its leaf
+    /// Triangles whose boxes were taken in along their leaf's path since the latest refit.
+    Index takenIn = 0;
   };
 
   /// Two subtrees to test against each other; the same node twice means "against itself".
@@ -54,8 +62,18 @@ class BvhBroadPhase final : public BroadPhase {
     Index treeA, nodeA, treeB, nodeB;
   };
 
+  /// Builds the trees not built yet, refits the moving ones and rebuilds those grown loose.
+  void refitOrRebuild(const BroadPhaseInput& input);
+  /// Makes `tree` hold the new boxes of `triangles` (its own, ascending).
+  void takeIn(const BroadPhaseInput& input, std::span<const Index> triangles, Tree& tree,
+              char& rebuilt);
+  void updateStats();
+  /// Appends the pairs of `triangle` with the triangles of `tree` whose boxes meet its box.
+  void query(const BroadPhaseInput& input, Index triangle, const Tree& tree,
+             std::vector<Index>& stack, std::vector<TrianglePair>& out) const;
   static void build(const BroadPhaseInput& input, Tree& tree);
-  static Index buildNode(const BroadPhaseInput& input, Tree& tree, Index begin, Index end);
+  static Index buildNode(const BroadPhaseInput& input, Tree& tree, Index begin, Index end,
+                         Index parent);
   static double refit(const BroadPhaseInput& input, Tree& tree);
   static double looseness(const Tree& tree);
   bool terminal(const Task& task) const;
@@ -65,7 +83,9 @@ class BvhBroadPhase final : public BroadPhase {
   std::vector<Tree> trees_;
   std::vector<char> rebuilt_;  ///< per tree: built this step
   std::vector<Task> tasks_, nextTasks_;
-  std::vector<std::vector<Task>> stacks_;  ///< per chunk
+  std::vector<std::vector<Task>> stacks_;        ///< per chunk
+  std::vector<std::vector<Index>> queryStacks_;  ///< per chunk of findPairsInvolving
+  std::vector<std::size_t> runs_;                ///< findPairsInvolving: where each surface's begin
   broad_phase_detail::PairBuffers buffers_;
   BvhStats stats_;
 };

@@ -69,9 +69,14 @@ class CollisionDetector {
   /// Sorted by particle, then by when the particle crossed (t), then by triangle.
   const std::vector<ParticleContact>& particleContacts() const { return particleContacts_; }
   BroadPhaseKind broadPhase() const { return broadPhase_->kind(); }
-  /// The pair cache, when settings.collisions.pair_cache is on: later stages of the substep may
-  /// take their pairs from it.
-  PairCache* pairCache() { return pairCache_ ? &*pairCache_ : nullptr; }
+  /// The pairs of other boxes of the same triangles (those of a later stage of the substep) from
+  /// the pair cache, which takes in the triangles whose boxes left it; false when
+  /// settings.collisions.pair_cache is off.
+  bool findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+    if (!pairCache_) return false;
+    pairCache_->findPairs(*broadPhase_, input, pairs);
+    return true;
+  }
   /// This substep's box of every collision triangle.
   std::span<const Box3> triangleBoxes() const { return boxes_; }
 

@@ -151,10 +151,10 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   // and most primitives of a candidate pair are rejected by these before any cubic is formed.
   updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(margin_), pathBoxes_);
   // The detector's cached pairs hold this stage's almost always: the response moves particles
-  // far less than the cache's margin. Its own broad phase only when they do not.
+  // far less than the cache's margin, and the few triangles it moves out are found again there.
+  // Its own broad phase only when the detector keeps no cache.
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
-  if (!detector.pairCache() || !detector.pairCache()->findCachedPairs(input, pairs_))
-    pairCache_.findPairs(*broadPhase_, input, pairs_);
+  if (!detector.findCachedPairs(input, pairs_)) pairCache_.findPairs(*broadPhase_, input, pairs_);
   detector.dropIgnoredPairs(geometry, pairs_);
   dropSurfacePairs(geometry, tangled_, pairs_);
   const Index particles = geometry.particleCount;

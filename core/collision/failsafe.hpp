@@ -123,7 +123,7 @@ class CollisionFailsafe {
   std::vector<Box3> boxes_;        ///< per collision triangle, over the substep
   std::vector<Box3> pathBoxes_;    ///< per collision vertex, over the substep
   std::unique_ptr<BroadPhase> broadPhase_;
-  PairCache pairCache_;
+  PairCache pairCache_;  ///< only when the detector keeps none
   std::vector<TrianglePair> pairs_;
   std::vector<std::pair<Index, Index>> tangled_;  ///< surface pairs, sorted
   /// Per collision triangle: bit k set when it owns its corner k, bit 3 + k its edge k → k+1. A

@@ -2,10 +2,8 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <functional>
 
 namespace softbake {
 
@@ -14,20 +12,6 @@ constexpr std::size_t kBoxGrain = 2048;
 constexpr std::size_t kFilterGrain = 2048;  ///< cached pairs per filter chunk, at least
 constexpr std::size_t kFilterChunks = 64;
 }  // namespace
-
-bool PairCache::stillValid(const BroadPhaseInput& input) const {
-  if (margin_ < 0 || grown_.size() != input.triangleBox.size() ||
-      surfaceCount_ != input.surfaces.size())
-    return false;
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, grown_.size(), kBoxGrain), true,
-      [&](const tbb::blocked_range<std::size_t>& range, bool valid) {
-        for (std::size_t t = range.begin(); valid && t != range.end(); ++t)
-          valid = grown_[t].contains(input.triangleBox[t]);
-        return valid;
-      },
-      std::logical_and<bool>());
-}
 
 void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
@@ -43,23 +27,63 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
                         grown_[t] = Box3(input.triangleBox[t].min().array() - margin_,
                                          input.triangleBox[t].max().array() + margin_);
                     });
-  BroadPhaseInput grownInput = input;
-  grownInput.triangleBox = grown_;
-  broadPhase.findPairs(grownInput, cached_);
+  broadPhase.findPairs(grownInput(input), cached_);
   surfaceCount_ = input.surfaces.size();
+  updatedSinceRebuild_ = 0;
   ++rebuilds_;
+}
+
+BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
+  BroadPhaseInput grown = input;
+  grown.triangleBox = grown_;
+  return grown;
+}
+
+bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
+  const std::size_t count = input.triangleBox.size();
+  if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size()) return false;
+  // The triangles that left, gathered in parallel chunks and joined in chunk order: ascending.
+  const std::size_t chunks = std::min(kFilterChunks, (count + kBoxGrain - 1) / kBoxGrain);
+  if (leftChunks_.size() < chunks) leftChunks_.resize(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::vector<Index>& out = leftChunks_[chunk];
+    out.clear();
+    for (std::size_t t = count * chunk / chunks; t < count * (chunk + 1) / chunks; ++t)
+      if (!grown_[t].contains(input.triangleBox[t])) out.push_back(Index(t));
+  });
+  left_.clear();
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+    left_.insert(left_.end(), leftChunks_[chunk].begin(), leftChunks_[chunk].end());
+  if (left_.empty()) return true;
+  // Triangles found again one by one cost more than in a rebuild, which also recentres every
+  // grown box: once those found since the latest rebuild add up to kRebuildShare of all, rebuild.
+  updatedSinceRebuild_ += left_.size();
+  if (double(updatedSinceRebuild_) > kRebuildShare * double(count)) return false;
+
+  for (Index t : left_)
+    grown_[t] = Box3(input.triangleBox[t].min().array() - margin_,
+                     input.triangleBox[t].max().array() + margin_);
+  if (!broadPhase.findPairsInvolving(grownInput(input), left_, fresh_)) return false;
+  // Their old pairs out, their new ones in, in order.
+  hasLeft_.resize(count);
+  for (Index t : left_) hasLeft_[t] = 1;
+  cached_.erase(std::remove_if(cached_.begin(), cached_.end(),
+                               [&](const TrianglePair& pair) {
+                                 return hasLeft_[pair.first] | hasLeft_[pair.second];
+                               }),
+                cached_.end());
+  for (Index t : left_) hasLeft_[t] = 0;
+  merged_.resize(cached_.size() + fresh_.size());
+  std::merge(cached_.begin(), cached_.end(), fresh_.begin(), fresh_.end(), merged_.begin());
+  cached_.swap(merged_);
+  ++updates_;
+  return true;
 }
 
 void PairCache::findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                           std::vector<TrianglePair>& pairs) {
-  if (!stillValid(input)) rebuild(broadPhase, input);
+  if (!update(broadPhase, input)) rebuild(broadPhase, input);
   filter(input, pairs);
-}
-
-bool PairCache::findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
-  if (!stillValid(input)) return false;
-  filter(input, pairs);
-  return true;
 }
 
 void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {

@@ -9,6 +9,15 @@
 /// same order, what the broad phase would return on the current boxes: results stay identical,
 /// byte for byte, with the cache on or off. A substep moves a particle by a tiny fraction of a
 /// triangle, so the broad phase runs once every few dozen steps instead of every step.
+///
+/// When some triangles leave their grown boxes, the whole cache need not be rebuilt: those
+/// triangles get boxes grown around where they are now, their cached pairs are dropped, and the
+/// broad phase lists their pairs alone (findPairsInvolving), which are merged into the sorted
+/// list. Every other pair's two grown boxes are unchanged, so the cache still holds every eligible
+/// pair whose grown boxes overlap, and stays exact. It matters at a million triangles, where some
+/// triangle leaves its grown box on every step, so a cache rebuilt whole was rebuilt every step.
+/// Once the triangles found again alone add up to kRebuildShare of them all, or the broad phase
+/// cannot answer for a few, the cache is rebuilt whole.
 
 #include <vector>
 
@@ -23,29 +32,41 @@ class PairCache {
   explicit PairCache(double margin = 0.25) : marginFraction_(margin) {}
 
   /// The exact overlapping eligible pairs of `input`, sorted, using `broadPhase` only when some
-  /// box has left its grown box (or on the first call, or when the surfaces changed).
+  /// box has left its grown box (or on the first call, or when the surfaces changed). Any boxes
+  /// of the same triangles will do: a later stage of the substep (the failsafe) shares the cache.
   void findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                  std::vector<TrianglePair>& pairs);
 
-  /// The same pairs from the cache alone, for other boxes of the same triangles (those of a later
-  /// stage of the substep), when every box lies inside its grown box; otherwise false. Uses
-  /// scratch buffers: not at the same time as findPairs().
-  bool findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
-
   std::size_t rebuilds() const { return rebuilds_; }
+  /// Steps on which some triangles left their grown boxes and only their pairs were found again.
+  std::size_t updates() const { return updates_; }
+
+  /// Finding the pairs of triangles one by one costs more per triangle than a rebuild, which
+  /// descends two trees together and recentres every grown box. Once the triangles found again
+  /// one by one since the latest rebuild add up to this fraction of them all, the cache is rebuilt
+  /// instead. Measured on figure 7 and balls1m (bench/results/integrators.md).
+  static constexpr double kRebuildShare = 0.25;
 
  private:
   void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
-  bool stillValid(const BroadPhaseInput& input) const;
   void rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input);
+  /// The cache made valid for `input` by finding again only the pairs of the triangles that left
+  /// their grown boxes; false where it must be rebuilt whole.
+  bool update(BroadPhase& broadPhase, const BroadPhaseInput& input);
+  BroadPhaseInput grownInput(const BroadPhaseInput& input) const;
 
   double marginFraction_;
   Scalar margin_ = -1;  ///< scene units; negative until the first rebuild
   std::vector<Box3> grown_;
   std::vector<TrianglePair> cached_;
-  broad_phase_detail::PairBuffers buffers_;  ///< per filter chunk
+  broad_phase_detail::PairBuffers buffers_;     ///< per filter chunk
+  std::vector<std::vector<Index>> leftChunks_;  ///< per chunk: the triangles that left
+  std::vector<Index> left_;                     ///< all of them, ascending
+  std::vector<char> hasLeft_;                   ///< per triangle
+  std::vector<TrianglePair> fresh_, merged_;
   std::size_t surfaceCount_ = 0;
-  std::size_t rebuilds_ = 0;
+  std::size_t rebuilds_ = 0, updates_ = 0;
+  std::size_t updatedSinceRebuild_ = 0;
 };
 
 }  // namespace softbake
