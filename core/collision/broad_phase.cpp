@@ -50,12 +50,21 @@ bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind) {
 
 namespace broad_phase_detail {
 
-void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scratch) {
-  // Key: first · 2³² + second. Bytes that are zero in every key are skipped: a pass over them
-  // would keep the order.
+namespace {
+
+/// Pairs from one buffer's bucket on: the least that makes the bucketed sort worth its passes.
+constexpr std::size_t kBucketedSortMin = 16384;
+/// Buckets by the high bits of `first`: enough to keep any thread count busy.
+constexpr std::size_t kSortBuckets = 64;
+
+/// Sorts `data[0, n)` and drops repeats, `temp` of the same size as the other half; returns how
+/// many are left, in `data`. Key: first · 2³² + second. Bytes that are zero in every key are
+/// skipped: a pass over them would keep the order.
+std::size_t radixSortUnique(TrianglePair* data, TrianglePair* temp, std::size_t n) {
   std::uint32_t usedBits[2] = {0, 0};
-  for (const TrianglePair& pair : pairs) usedBits[0] |= pair.second, usedBits[1] |= pair.first;
-  scratch.resize(pairs.size());
+  for (std::size_t k = 0; k < n; ++k) usedBits[0] |= data[k].second, usedBits[1] |= data[k].first;
+  TrianglePair* from = data;
+  TrianglePair* to = temp;
   for (int pass = 0; pass < 8; ++pass) {
     const int half = pass / 4, shift = 8 * (pass % 4);
     if (((usedBits[half] >> shift) & 0xff) == 0) continue;
@@ -63,12 +72,20 @@ void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scr
       return ((half ? pair.first : pair.second) >> shift) & 0xff;
     };
     std::array<std::size_t, 257> start{};
-    for (const TrianglePair& pair : pairs) ++start[digit(pair) + 1];
+    for (std::size_t k = 0; k < n; ++k) ++start[digit(from[k]) + 1];
     for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
-    for (const TrianglePair& pair : pairs) scratch[start[digit(pair)]++] = pair;
-    pairs.swap(scratch);
+    for (std::size_t k = 0; k < n; ++k) to[start[digit(from[k])]++] = from[k];
+    std::swap(from, to);
   }
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  if (from != data) std::copy(from, from + n, data);
+  return std::size_t(std::unique(data, data + n) - data);
+}
+
+}  // namespace
+
+void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scratch) {
+  scratch.resize(pairs.size());
+  pairs.resize(radixSortUnique(pairs.data(), scratch.data(), pairs.size()));
 }
 
 void PairBuffers::reset(std::size_t chunks) {
@@ -78,10 +95,68 @@ void PairBuffers::reset(std::size_t chunks) {
 }
 
 void PairBuffers::mergeInto(std::vector<TrianglePair>& pairs) {
-  pairs.clear();
-  for (const std::vector<TrianglePair>& buffer : buffers_)
-    pairs.insert(pairs.end(), buffer.begin(), buffer.end());
-  sortUnique(pairs, scratch_);
+  std::size_t total = 0;
+  for (const std::vector<TrianglePair>& buffer : buffers_) total += buffer.size();
+  if (total < kBucketedSortMin) {
+    pairs.clear();
+    for (const std::vector<TrianglePair>& buffer : buffers_)
+      pairs.insert(pairs.end(), buffer.begin(), buffer.end());
+    sortUnique(pairs, scratch_);
+    return;
+  }
+  // Many pairs (a rebuild at a million faces): spread into buckets by the high bits of `first`,
+  // so each bucket's pairs all precede the next's, and sort the buckets in parallel. The result
+  // is the one sorted list, whatever the thread count.
+  const std::size_t buffers = buffers_.size();
+  bucketStart_.assign(buffers * kSortBuckets, 0);  // per buffer, then per bucket: its count
+  tbb::parallel_for(std::size_t(0), buffers, [&](std::size_t b) {
+    Index highest = 0;
+    for (const TrianglePair& pair : buffers_[b]) highest = std::max(highest, pair.first);
+    bucketStart_[b * kSortBuckets] = highest;
+  });
+  Index highest = 0;
+  for (std::size_t b = 0; b < buffers; ++b)
+    highest = std::max(highest, Index(bucketStart_[b * kSortBuckets]));
+  int shift = 0;
+  while ((std::size_t(highest) >> shift) >= kSortBuckets) ++shift;
+  bucketStart_.assign(buffers * kSortBuckets, 0);
+  tbb::parallel_for(std::size_t(0), buffers, [&](std::size_t b) {
+    for (const TrianglePair& pair : buffers_[b])
+      ++bucketStart_[b * kSortBuckets + (pair.first >> shift)];
+  });
+  // Where each buffer's part of each bucket begins: bucket by bucket, buffers in order.
+  std::size_t at = 0;
+  bucketEnd_.resize(kSortBuckets);
+  for (std::size_t bucket = 0; bucket < kSortBuckets; ++bucket) {
+    for (std::size_t b = 0; b < buffers; ++b) {
+      const std::size_t count = bucketStart_[b * kSortBuckets + bucket];
+      bucketStart_[b * kSortBuckets + bucket] = at;
+      at += count;
+    }
+    bucketEnd_[bucket] = at;
+  }
+  scratch_.resize(total);
+  pairs.resize(total);
+  tbb::parallel_for(std::size_t(0), buffers, [&](std::size_t b) {
+    std::size_t* next = &bucketStart_[b * kSortBuckets];
+    for (const TrianglePair& pair : buffers_[b]) scratch_[next[pair.first >> shift]++] = pair;
+  });
+  // Each bucket sorted in place, `pairs` as its other half; then the unique ones packed.
+  bucketKept_.resize(kSortBuckets);
+  tbb::parallel_for(std::size_t(0), kSortBuckets, [&](std::size_t bucket) {
+    const std::size_t begin = bucket ? bucketEnd_[bucket - 1] : 0;
+    bucketKept_[bucket] =
+        radixSortUnique(&scratch_[begin], &pairs[begin], bucketEnd_[bucket] - begin);
+  });
+  bucketPacked_.resize(kSortBuckets + 1);
+  bucketPacked_[0] = 0;
+  for (std::size_t bucket = 0; bucket < kSortBuckets; ++bucket)
+    bucketPacked_[bucket + 1] = bucketPacked_[bucket] + bucketKept_[bucket];
+  tbb::parallel_for(std::size_t(0), kSortBuckets, [&](std::size_t bucket) {
+    const TrianglePair* from = &scratch_[bucket ? bucketEnd_[bucket - 1] : 0];
+    std::copy(from, from + bucketKept_[bucket], pairs.data() + bucketPacked_[bucket]);
+  });
+  pairs.resize(bucketPacked_[kSortBuckets]);
 }
 
 }  // namespace broad_phase_detail

@@ -136,7 +136,7 @@ struct CachedSurface {
 /// Sorts and drops repeats: the one output order every broad phase promises. A least-significant-
 /// digit radix sort over the bytes the indices use (four passes at 10 000 triangles), in `scratch`
 /// of the same size: a broad phase's pairs are tens of thousands, where it is several times
-/// faster than a comparison sort.
+/// faster than a comparison sort. PairBuffers::mergeInto() sorts millions in parallel buckets.
 void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scratch);
 
 /// Pairs found in parallel, one buffer per chunk of work: no two tasks share a buffer, so no lock
@@ -147,12 +147,16 @@ class PairBuffers {
   /// `chunks` empty buffers.
   void reset(std::size_t chunks);
   std::vector<TrianglePair>& operator[](std::size_t chunk) { return buffers_[chunk]; }
-  /// Replaces `pairs` with every buffer's pairs, sorted and unique.
+  /// Replaces `pairs` with every buffer's pairs, sorted and unique. Many pairs (a rebuild at a
+  /// million faces) are sorted in parallel, in buckets by the high bits of `first`.
   void mergeInto(std::vector<TrianglePair>& pairs);
 
  private:
   std::vector<std::vector<TrianglePair>> buffers_;
   std::vector<TrianglePair> scratch_;  ///< the radix sort's other half
+  /// The bucketed sort of many pairs: where each buffer's part of each bucket goes, where each
+  /// bucket ends, how many of its pairs are unique, and where those go.
+  std::vector<std::size_t> bucketStart_, bucketEnd_, bucketKept_, bucketPacked_;
 };
 
 }  // namespace broad_phase_detail

@@ -577,6 +577,34 @@ TEST(SpatialHash, HugeStaticTrianglesStayWithinTheEntryBound) {
   EXPECT_GT(broadPhase.lastStats().levels, 1);
 }
 
+TEST(PairBuffers, MergeManyPairsIntoOneSortedListWithoutRepeats) {
+  // Enough pairs for the parallel bucketed sort, some in several buffers, with indices from a
+  // few dozen (one bucket) to a million: the same list as a comparison sort and std::unique.
+  std::mt19937 rng(31);
+  for (const Index range : {Index(40), Index(5000), Index(1'000'000)}) {
+    std::uniform_int_distribution<Index> index(0, range - 1);
+    broad_phase_detail::PairBuffers buffers;
+    buffers.reset(37);
+    std::vector<TrianglePair> all;
+    for (int k = 0; k < 120'000; ++k) {
+      Index a = index(rng), b = index(rng);
+      if (a == b) continue;
+      const TrianglePair pair{std::min(a, b), std::max(a, b)};
+      buffers[std::size_t(k) % 37].push_back(pair);
+      all.push_back(pair);
+      if (k % 10 == 0) {  // the same pair found again from another chunk
+        buffers[std::size_t(k + 5) % 37].push_back(pair);
+        all.push_back(pair);
+      }
+    }
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    std::vector<TrianglePair> merged;
+    buffers.mergeInto(merged);
+    EXPECT_EQ(merged, all) << "indices below " << range << ": " << firstDifference(all, merged);
+  }
+}
+
 TEST(Bvh, RebuildsWhenRefitLetsTheTreeGrowLoose) {
   std::mt19937 rng(29);
   Soup soup = icosphereScene(rng, 1, 3, 2, false);
