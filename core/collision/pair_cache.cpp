@@ -8,9 +8,9 @@
 namespace softbake {
 
 namespace {
-constexpr std::size_t kBoxGrain = 2048;
+constexpr std::size_t kBoxGrain = 2048;     ///< triangles per chunk of a pass over boxes, at least
 constexpr std::size_t kFilterGrain = 2048;  ///< cached pairs per filter chunk, at least
-constexpr std::size_t kFilterChunks = 64;
+constexpr std::size_t kMostChunks = 64;     ///< chunks of the filter and the leavers' scan
 }  // namespace
 
 void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
@@ -43,7 +43,7 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
   if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size()) return false;
   // The triangles that left, gathered in parallel chunks and joined in chunk order: ascending.
-  const std::size_t chunks = std::min(kFilterChunks, (count + kBoxGrain - 1) / kBoxGrain);
+  const std::size_t chunks = std::min(kMostChunks, (count + kBoxGrain - 1) / kBoxGrain);
   if (leftChunks_.size() < chunks) leftChunks_.resize(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<Index>& out = leftChunks_[chunk];
@@ -91,7 +91,7 @@ void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& 
   // Without branches: a quarter of the cached pairs overlap, in no pattern a branch predictor
   // learns, so each pair is written and kept or overwritten by the next.
   const std::size_t chunks =
-      std::min(kFilterChunks, (cached_.size() + kFilterGrain - 1) / kFilterGrain);
+      std::min(kMostChunks, (cached_.size() + kFilterGrain - 1) / kFilterGrain);
   buffers_.reset(chunks);
   const Box3* box = input.triangleBox.data();
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
