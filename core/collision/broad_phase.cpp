@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
@@ -108,18 +109,17 @@ void PairBuffers::mergeInto(std::vector<TrianglePair>& pairs) {
   // so each bucket's pairs all precede the next's, and sort the buckets in parallel. The result
   // is the one sorted list, whatever the thread count.
   const std::size_t buffers = buffers_.size();
-  bucketStart_.assign(buffers * kSortBuckets, 0);  // per buffer, then per bucket: its count
-  tbb::parallel_for(std::size_t(0), buffers, [&](std::size_t b) {
-    Index highest = 0;
-    for (const TrianglePair& pair : buffers_[b]) highest = std::max(highest, pair.first);
-    bucketStart_[b * kSortBuckets] = highest;
-  });
-  Index highest = 0;
-  for (std::size_t b = 0; b < buffers; ++b)
-    highest = std::max(highest, Index(bucketStart_[b * kSortBuckets]));
+  const Index highest = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, buffers), Index(0),
+      [&](const tbb::blocked_range<std::size_t>& range, Index most) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b)
+          for (const TrianglePair& pair : buffers_[b]) most = std::max(most, pair.first);
+        return most;
+      },
+      [](Index a, Index b) { return std::max(a, b); });
   int shift = 0;
   while ((std::size_t(highest) >> shift) >= kSortBuckets) ++shift;
-  bucketStart_.assign(buffers * kSortBuckets, 0);
+  bucketStart_.assign(buffers * kSortBuckets, 0);  // per buffer, then per bucket: its count
   tbb::parallel_for(std::size_t(0), buffers, [&](std::size_t b) {
     for (const TrianglePair& pair : buffers_[b])
       ++bucketStart_[b * kSortBuckets + (pair.first >> shift)];

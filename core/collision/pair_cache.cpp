@@ -24,13 +24,16 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kBoxGrain),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t t = range.begin(); t != range.end(); ++t)
-                        grown_[t] = Box3(input.triangleBox[t].min().array() - margin_,
-                                         input.triangleBox[t].max().array() + margin_);
+                        grown_[t] = grow(input.triangleBox[t]);
                     });
   broadPhase.findPairs(grownInput(input), cached_);
   surfaceCount_ = input.surfaces.size();
   updatedSinceRebuild_ = 0;
   ++rebuilds_;
+}
+
+Box3 PairCache::grow(const Box3& box) const {
+  return Box3(box.min().array() - margin_, box.max().array() + margin_);
 }
 
 BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
@@ -60,9 +63,7 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   updatedSinceRebuild_ += left_.size();
   if (double(updatedSinceRebuild_) > kRebuildShare * double(count)) return false;
 
-  for (Index t : left_)
-    grown_[t] = Box3(input.triangleBox[t].min().array() - margin_,
-                     input.triangleBox[t].max().array() + margin_);
+  for (Index t : left_) grown_[t] = grow(input.triangleBox[t]);
   if (!broadPhase.findPairsInvolving(grownInput(input), left_, fresh_)) return false;
   // Their old pairs out, their new ones in, in order.
   hasLeft_.resize(count);

@@ -53,6 +53,8 @@ class PairCache {
   /// The cache made valid for `input` by finding again only the pairs of the triangles that left
   /// their grown boxes; false where it must be rebuilt whole.
   bool update(BroadPhase& broadPhase, const BroadPhaseInput& input);
+  /// `box` grown by the margin on every side.
+  Box3 grow(const Box3& box) const;
   BroadPhaseInput grownInput(const BroadPhaseInput& input) const;
 
   double marginFraction_;
