@@ -72,8 +72,14 @@ void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
   command
       .add_option("--max-import-memory", load.maxImportMemoryMib,
-                  "most memory one mesh file's import may take, MiB (default: all of it)")
+                  "most memory one mesh file's import may take, MiB; the process reading it "
+                  "with assimp is held to it too (default: half of this machine's memory)")
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 40));
+  command
+      .add_option("--max-import-seconds", load.maxImportSeconds,
+                  "most seconds reading one mesh file with assimp may take (default " +
+                      std::to_string(defaults.maxSeconds) + ")")
+      ->check(CLI::Range(std::uint64_t(1), softbake::kMaxImportSeconds));
   command.add_option("--max-bodies", load.maxBodies, "most bodies the scene may have")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));

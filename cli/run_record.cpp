@@ -28,6 +28,7 @@ void eachRecordedOption(Options& options, Visit&& visit) {
   visit("max-vertices", options.load.maxVertices);
   visit("max-faces", options.load.maxFaces);
   visit("max-import-memory", options.load.maxImportMemoryMib);
+  visit("max-import-seconds", options.load.maxImportSeconds);
   visit("max-bodies", options.load.maxBodies);
   visit("frame-padding", options.framePadding);
   visit("contacts", options.contacts);

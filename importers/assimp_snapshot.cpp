@@ -3,22 +3,45 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fcntl.h>
+#include <poll.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <assimp/Importer.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <stdexcept>
+#include <thread>
 #include <unordered_set>
 
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/assimp_guards.hpp"
+#include "importers/memory_budget.hpp"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define SOFTBAKE_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SOFTBAKE_ADDRESS_SANITIZER 1
+#endif
+#endif
+#ifndef SOFTBAKE_ADDRESS_SANITIZER
+#define SOFTBAKE_ADDRESS_SANITIZER 0
+#endif
+#if SOFTBAKE_ADDRESS_SANITIZER
+#include <sanitizer/asan_interface.h>
+#endif
 
 namespace softbake {
 
@@ -172,13 +195,23 @@ class Writer {
   bool ok_ = true;
 };
 
+using Clock = std::chrono::steady_clock;
+
+// What Reader throws when its deadline passes before the bytes came: not a std::exception, so
+// that no handler of broken answers takes it for one.
+struct AnswerTimedOut {};
+
 class Reader {
  public:
-  explicit Reader(int fd) : fd_(fd) {}
+  /// `deadline`: when to give up waiting for bytes (AnswerTimedOut); Clock::time_point::max():
+  /// never.
+  explicit Reader(int fd, Clock::time_point deadline = Clock::time_point::max())
+      : fd_(fd), deadline_(deadline) {}
 
   void bytes(void* data, std::size_t size) {
     char* p = static_cast<char*>(data);
     while (size > 0) {
+      waitForBytes();
       const ssize_t got = ::read(fd_, p, size);
       if (got < 0 && errno == EINTR) continue;
       if (got < 0) throw std::runtime_error(cat("read failed: ", std::strerror(errno)));
@@ -221,7 +254,23 @@ class Reader {
     }
   }
 
+  // Returns when a read() will not block: there are bytes, or the writer is gone.
+  void waitForBytes() const {
+    if (deadline_ == Clock::time_point::max()) return;
+    for (;;) {
+      const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline_ - Clock::now());
+      if (left.count() <= 0) throw AnswerTimedOut();
+      pollfd ready = {fd_, POLLIN, 0};
+      // A minute at most per wait: poll() takes an int of milliseconds.
+      const int got = ::poll(&ready, 1, int(std::min<std::int64_t>(left.count(), 60'000)));
+      if (got > 0) return;
+      if (got < 0 && errno != EINTR)
+        throw std::runtime_error(cat("waiting for the answer failed: ", std::strerror(errno)));
+    }
+  }
+
   int fd_;
+  Clock::time_point deadline_;
 };
 
 // ThreadSanitizer's runtime in GCC 12 does not hold its allocator's locks across fork(), so the
@@ -242,6 +291,113 @@ constexpr bool kThreadSanitizer = false;
 
 // The first bytes of every answer: a child that died before writing them sent nothing.
 constexpr std::uint64_t kMagic = 0x736f667462616b65;  // "softbake"
+
+// The status of a child whose reading ran out of memory (std::bad_alloc reached it).
+constexpr int kOutOfMemoryStatus = 4;
+
+// ---- the child's limits ------------------------------------------------------------------------
+
+// A page the child and the parent share: the child marks on it that an allocation failed, and the
+// parent reads it however the child ended (an answer, std::bad_alloc, a crash after a failed
+// allocation, or AddressSanitizer's report of one).
+struct ChildMarks {
+  std::atomic<int> allocationFailed{0};
+};
+static_assert(std::atomic<int>::is_always_lock_free, "shared between processes");
+
+class SharedMarks {
+ public:
+  SharedMarks() {
+    void* page = ::mmap(nullptr, sizeof(ChildMarks), PROT_READ | PROT_WRITE,
+                        MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (page != MAP_FAILED) marks_ = new (page) ChildMarks();
+  }
+  ~SharedMarks() {
+    if (marks_) ::munmap(marks_, sizeof(ChildMarks));
+  }
+  SharedMarks(const SharedMarks&) = delete;
+  SharedMarks& operator=(const SharedMarks&) = delete;
+
+  ChildMarks* get() const { return marks_; }  ///< null when the page could not be mapped
+
+ private:
+  ChildMarks* marks_ = nullptr;
+};
+
+// In the child only: where it marks a failed allocation.
+ChildMarks* childMarks = nullptr;
+
+void markFailedAllocation() {
+  if (childMarks) childMarks->allocationFailed.store(1, std::memory_order_relaxed);
+}
+
+// operator new calls it when it finds no memory; then it throws std::bad_alloc as it would.
+void onFailedNew() {
+  markFailedAllocation();
+  throw std::bad_alloc();
+}
+
+#if SOFTBAKE_ADDRESS_SANITIZER
+// AddressSanitizer's allocator does not throw std::bad_alloc where it finds no memory: it reports
+// and ends the process with status 1, as it does for a memory error. Its report tells the two
+// apart.
+void onSanitizerReport(const char* report) {
+  if (std::strstr(report, "out of memory") || std::strstr(report, "allocation-size-too-big"))
+    markFailedAllocation();
+}
+#endif
+
+void watchAllocations(ChildMarks* marks) {
+  childMarks = marks;
+  std::set_new_handler(onFailedNew);
+#if SOFTBAKE_ADDRESS_SANITIZER
+  __asan_set_error_report_callback(onSanitizerReport);
+#endif
+}
+
+// The address space this process maps now, in bytes; 0 when /proc does not say.
+std::uint64_t mappedBytes() {
+  const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  char text[128] = {};
+  const ssize_t got = ::read(fd, text, sizeof text - 1);
+  ::close(fd);
+  if (got <= 0) return 0;
+  const long pageSize = ::sysconf(_SC_PAGESIZE);
+  return std::strtoull(text, nullptr, 10) * std::uint64_t(pageSize > 0 ? pageSize : 0);
+}
+
+// The child may map `bytes` more than it has: what it inherited (the parent's threads' stacks,
+// a sanitizer's shadow memory reserved up front) is not the import's.
+void capAddressSpace(std::uint64_t bytes) {
+  if (bytes == 0) return;
+  const std::uint64_t now = mappedBytes();
+  if (now == 0) return;
+  rlimit limit = {};
+  if (::getrlimit(RLIMIT_AS, &limit) != 0) return;
+  const rlim_t wanted = rlim_t(now + bytes);
+  if (limit.rlim_cur != RLIM_INFINITY && limit.rlim_cur <= wanted) return;
+  limit.rlim_cur = wanted;
+  ::setrlimit(RLIMIT_AS, &limit);
+}
+
+// The tests' ways to an import past its limits (assimp_snapshot.hpp), before the reading.
+void actAsTheTestsAsk() {
+  if (const char* text = std::getenv("SOFTBAKE_TEST_IMPORT_STALL_SECONDS")) {
+    const double seconds = std::strtod(text, nullptr);
+    if (seconds > 0 && seconds < 1e6)
+      std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  }
+  if (const char* mebibytes = std::getenv("SOFTBAKE_TEST_IMPORT_ALLOCATE_MIB")) {
+    constexpr std::size_t kBlock = std::size_t(64) << 20;
+    std::vector<std::unique_ptr<char[]>> blocks;
+    for (std::uint64_t left = std::strtoull(mebibytes, nullptr, 10) << 20; left > 0;
+         left -= std::min<std::uint64_t>(left, kBlock)) {
+      blocks.emplace_back(new char[kBlock]);
+      blocks.back()[0] = 1;
+    }
+  }
+}
 
 // In the child: a crash is the parent's to report, the same way in every build. A sanitizer's or
 // libFuzzer's handler would print a report, exit with status 1 instead of the signal, and
@@ -338,8 +494,9 @@ bool writeAssimpSnapshot(int fd, const AssimpSnapshot& snapshot) {
   return out.flush();
 }
 
-AssimpSnapshot readAssimpSnapshot(int fd) {
-  Reader in(fd);
+namespace {
+
+AssimpSnapshot readSnapshot(Reader& in) {
   if (in.number() != kMagic) throw std::runtime_error("the answer does not start as one");
   AssimpSnapshot snapshot;
   snapshot.error = in.text();
@@ -377,10 +534,21 @@ AssimpSnapshot readAssimpSnapshot(int fd) {
   return snapshot;
 }
 
+}  // namespace
+
+AssimpSnapshot readAssimpSnapshot(int fd) {
+  Reader in(fd);
+  return readSnapshot(in);
+}
+
 AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postProcess,
-                                         const std::string& file) {
+                                         const std::string& file, const ImportLimits& limits) {
   if constexpr (kThreadSanitizer) return takeAssimpSnapshot(read, postProcess);
   installAssimpLogging();
+  const Clock::time_point deadline =
+      Clock::now() + std::chrono::seconds(std::min(limits.maxSeconds, kMaxImportSeconds));
+  const std::uint64_t memoryCap = importMemoryBytes(limits);
+  const SharedMarks marks;
   int pipe[2];
   if (::pipe2(pipe, O_CLOEXEC) != 0)
     throw Error(
@@ -399,12 +567,15 @@ AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postPr
     const int devNull = ::open("/dev/null", O_WRONLY);
     if (devNull >= 0) ::dup2(devNull, STDERR_FILENO);
     restoreDefaultCrashHandling();
+    watchAllocations(marks.get());
+    capAddressSpace(memoryCap);
     AssimpSnapshot snapshot;
     try {
+      actAsTheTestsAsk();
       snapshot = takeAssimpSnapshot(read, postProcess);
     } catch (const std::bad_alloc&) {
-      snapshot = AssimpSnapshot();
-      snapshot.error = "ran out of memory";
+      markFailedAllocation();
+      ::_exit(kOutOfMemoryStatus);
     } catch (const std::exception& e) {
       snapshot = AssimpSnapshot();
       snapshot.error = e.what();
@@ -416,9 +587,13 @@ AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postPr
 
   AssimpSnapshot snapshot;
   std::string broken;
-  bool outOfMemory = false;
+  bool outOfMemory = false, timedOut = false;
   try {
-    snapshot = readAssimpSnapshot(pipe[0]);
+    Reader in(pipe[0], deadline);
+    snapshot = readSnapshot(in);
+  } catch (const AnswerTimedOut&) {
+    timedOut = true;
+    ::kill(child, SIGKILL);
   } catch (const std::bad_alloc&) {
     outOfMemory = true;
   } catch (const std::exception& e) {
@@ -430,7 +605,20 @@ AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postPr
   int status = 0;
   while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
+  if (timedOut) throw Error(importTimeLimitMessage(file, limits));
   if (outOfMemory) throw std::bad_alloc();
+  const bool answered = WIFEXITED(status) && WEXITSTATUS(status) == 0 && broken.empty();
+  // A failed allocation that assimp caught and turned into its error, or that ended the child.
+  const bool allocationFailed =
+      marks.get() && marks.get()->allocationFailed.load(std::memory_order_relaxed) != 0;
+  if (allocationFailed && (!answered || !snapshot.error.empty()))
+    throw Error(importMemoryLimitMessage(file, limits));
+  if (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+    throw Error(cat(file, ": the process reading the file was killed (", ::strsignal(SIGKILL),
+                    "), most likely by the system for lack of memory: the import memory limit of ",
+                    formatBytes(double(memoryCap)),
+                    " is more than this machine could give it (--max-import-memory or "
+                    "settings.import.max_memory_mib lowers it)"));
   if (WIFSIGNALED(status))
     throw Error(cat(file, ": assimp crashed reading the file (", ::strsignal(WTERMSIG(status)),
                     "): the file is corrupt, or trips a bug in assimp"));

@@ -21,6 +21,7 @@
 
 #include "core/mesh/triangle_mesh.hpp"
 #include "importers/assimp_log.hpp"
+#include "importers/import_limits.hpp"
 
 namespace Assimp {
 class Importer;
@@ -70,11 +71,23 @@ using AssimpRead = std::function<const aiScene*(Assimp::Importer& importer, unsi
 /// `postProcess` is the post-processing done after validation.
 AssimpSnapshot takeAssimpSnapshot(const AssimpRead& read, unsigned postProcess);
 
-/// takeAssimpSnapshot() in a forked child (in this process in a ThreadSanitizer build: the .cpp
-/// says why). Throws softbake::Error starting with `file` when the
-/// child dies (a crash inside assimp) or sends back less than a whole snapshot.
+/// takeAssimpSnapshot() in a forked child (in this process in a ThreadSanitizer build, without
+/// the limits: the .cpp says why), within `limits`:
+/// - memory: the child may map at most importMemoryBytes(limits) beyond what it started with
+///   (RLIMIT_AS), so an allocation past it fails inside assimp instead of taking the machine's
+///   memory;
+/// - time: the child that has not answered within limits.maxSeconds is killed (SIGKILL).
+///
+/// Throws softbake::Error starting with `file` when the child went past either limit (the message
+/// names the limit and how to raise it), was killed by the system (most likely for lack of
+/// memory), died otherwise (a crash inside assimp), or sent back less than a whole snapshot.
+///
+/// For the tests, two environment variables, read by the child only, act before it reads: it waits
+/// as many seconds as SOFTBAKE_TEST_IMPORT_STALL_SECONDS says, and maps as many MiB as
+/// SOFTBAKE_TEST_IMPORT_ALLOCATE_MIB says (in blocks of 64 MiB, untouched): an import past its
+/// time or memory limit without a file that takes that long or that much.
 AssimpSnapshot takeAssimpSnapshotInChild(const AssimpRead& read, unsigned postProcess,
-                                         const std::string& file);
+                                         const std::string& file, const ImportLimits& limits = {});
 
 /// The byte form the child sends through a pipe, written to and read from a file descriptor as it
 /// goes, so neither side holds a second copy of a big mesh. writeAssimpSnapshot() returns false

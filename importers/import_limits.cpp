@@ -6,6 +6,20 @@
 
 namespace softbake {
 
+namespace {
+
+// "1.0 KiB", or "11.7 GiB, half of this machine's memory" for the default.
+std::string memoryCapText(const ImportLimits& limits) {
+  const std::string bytes = formatBytes(double(importMemoryBytes(limits)));
+  return limits.maxMemoryBytes > 0 ? bytes : cat(bytes, ", half of this machine's memory");
+}
+
+}  // namespace
+
+std::uint64_t importMemoryBytes(const ImportLimits& limits) {
+  return limits.maxMemoryBytes > 0 ? limits.maxMemoryBytes : physicalMemoryBytes() / 2;
+}
+
 void requireWithinLimits(const std::filesystem::path& path, std::uint64_t vertices,
                          std::uint64_t faces, const ImportLimits& limits) {
   if (faces > limits.maxFaces)
@@ -19,15 +33,25 @@ void requireWithinLimits(const std::filesystem::path& path, std::uint64_t vertic
 
 void requireImportMemory(const std::filesystem::path& path, double neededBytes,
                          std::string_view purpose, const ImportLimits& limits) {
-  const std::uint64_t machine = physicalMemoryBytes();
-  const bool capped =
-      limits.maxMemoryBytes > 0 && (machine == 0 || limits.maxMemoryBytes < machine);
-  if (capped && neededBytes > double(limits.maxMemoryBytes))
+  // More than the machine has is the machine's limit, which no flag raises.
+  requireMemory(path, neededBytes, purpose, physicalMemoryBytes());
+  const std::uint64_t cap = importMemoryBytes(limits);
+  if (cap > 0 && neededBytes > double(cap))
     throw Error(cat(path.string(), ": ", purpose, " needs about ", formatBytes(neededBytes),
-                    ", above the import memory limit of ",
-                    formatBytes(double(limits.maxMemoryBytes)),
+                    ", above the import memory limit of ", memoryCapText(limits),
                     " (--max-import-memory or settings.import.max_memory_mib raises it)"));
-  requireMemory(path, neededBytes, purpose, machine);
+}
+
+std::string importTimeLimitMessage(std::string_view file, const ImportLimits& limits) {
+  return cat(file, ": reading the file took longer than the import time limit of ",
+             limits.maxSeconds,
+             " s (--max-import-seconds or settings.import.max_seconds raises it)");
+}
+
+std::string importMemoryLimitMessage(std::string_view file, const ImportLimits& limits) {
+  return cat(file, ": reading the file took more memory than the import memory limit of ",
+             memoryCapText(limits),
+             " (--max-import-memory or settings.import.max_memory_mib raises it)");
 }
 
 }  // namespace softbake

@@ -280,8 +280,9 @@ ImportedMeshes importWithAssimp(const std::filesystem::path& path, const MeshImp
                                 const PlyPreparation* ply, const AssimpRead& read,
                                 std::string_view objText) {
   const std::string file = path.string();
-  // In a child process: a crash inside assimp ends there, as an error naming the file.
-  const AssimpSnapshot scene = takeAssimpSnapshotInChild(read, kPostProcess, file);
+  // In a child process, within the time and memory limits: a crash inside assimp ends there, as
+  // an error naming the file.
+  const AssimpSnapshot scene = takeAssimpSnapshotInChild(read, kPostProcess, file, options.limits);
   if (!scene.error.empty()) {
     if (scene.error.find("No suitable reader found") != std::string::npos)
       throw Error(cat(file, ": unsupported format (assimp: ", scene.error, ")"));

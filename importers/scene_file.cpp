@@ -128,8 +128,8 @@ class SceneParser {
 
   // Before the bodies, whose meshes it applies to. The command line's values win.
   void parseImport(const JsonValue& value) {
-    const JsonObject object =
-        value.object({"accept_lossy", "max_vertices", "max_faces", "max_memory_mib"});
+    const JsonObject object = value.object(
+        {"accept_lossy", "max_vertices", "max_faces", "max_memory_mib", "max_seconds"});
     if (auto accept = object.find("accept_lossy"))
       options_.acceptLossyImport = options_.acceptLossyImport || accept->boolean();
     if (auto vertices = object.find("max_vertices"))
@@ -138,6 +138,8 @@ class SceneParser {
       limits_.maxFaces = std::uint64_t(faces->integerAtLeast(1));
     if (auto memory = object.find("max_memory_mib"))
       limits_.maxMemoryBytes = std::uint64_t(memory->integerIn(1, kMaxMebibytes)) << 20;
+    if (auto seconds = object.find("max_seconds"))
+      limits_.maxSeconds = std::uint64_t(seconds->integerIn(1, kMaxImportSeconds));
   }
 
   MeshImportOptions importOptions(bool merge) const {
@@ -531,6 +533,7 @@ ImportLimits SceneLoadOptions::importLimits(ImportLimits scene) const {
   if (maxVertices) scene.maxVertices = *maxVertices;
   if (maxFaces) scene.maxFaces = *maxFaces;
   if (maxImportMemoryMib) scene.maxMemoryBytes = *maxImportMemoryMib << 20;
+  if (maxImportSeconds) scene.maxSeconds = *maxImportSeconds;
   return scene;
 }
 

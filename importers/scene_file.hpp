@@ -62,7 +62,7 @@ struct SceneLoadOptions {
   bool acceptLossyImport = false;
   /// Caps per mesh file (ImportLimits); unset ones are the scene's `settings.import` values, or
   /// the defaults.
-  std::optional<std::uint64_t> maxVertices{}, maxFaces{}, maxImportMemoryMib{};
+  std::optional<std::uint64_t> maxVertices{}, maxFaces{}, maxImportMemoryMib{}, maxImportSeconds{};
   /// `scene` (the defaults, or a scene's settings.import) with the caps set here written over it.
   ImportLimits importLimits(ImportLimits scene = {}) const;
   /// Bodies a scene may have, counted before its meshes are read and again as files split into

@@ -181,6 +181,9 @@ const std::map<std::string, Keyword>& keywords() {
               loadWholeKeyword("--max-faces", 1, 1LL << 62, &SceneLoadOptions::maxFaces));
     k.emplace("max_import_memory", loadWholeKeyword("--max-import-memory", 1, 1LL << 40,
                                                     &SceneLoadOptions::maxImportMemoryMib));
+    k.emplace("max_import_seconds",
+              loadWholeKeyword("--max-import-seconds", 1, static_cast<long long>(kMaxImportSeconds),
+                               &SceneLoadOptions::maxImportSeconds));
     k.emplace("max_bodies",
               loadWholeKeyword("--max-bodies", 1, 1LL << 40, &SceneLoadOptions::maxBodies));
 

@@ -359,7 +359,8 @@ Simulation(scene=None, **options)
     paths relative to the current directory), or None for the built-in default scene.
   options: the simulation settings `softbake run` takes as flags, named as the flag without its
     dashes: frames, fps, integrator, substeps, broadphase, levels, response, no_response,
-    no_pair_cache, accept_lossy_import, max_vertices, max_faces, max_import_memory, max_bodies;
+    no_pair_cache, accept_lossy_import, max_vertices, max_faces, max_import_memory,
+    max_import_seconds, max_bodies;
     threads limits the worker threads (0: all cores). The results do not depend on it.
 
 The simulation starts at frame 1, the initial state; advance() simulates the next frames.
@@ -437,7 +438,7 @@ options: the flags of `softbake run`, named without their dashes and with '_' fo
   --no-render, None: the scene's choice), size ('1280x720' or (1280, 720)), no_contact_spheres,
   contacts_view ('xray' or 'opaque'), render_while_simulating, vdb, voxel_size, vdb_fog,
   vdb_compression, up, pc2, mdd, threads, quiet, max_output_gib, no_cache, checkpoint_every, cache_only, resume, accept_lossy_import,
-  max_vertices, max_faces, max_import_memory, max_bodies.
+  max_vertices, max_faces, max_import_memory, max_import_seconds, max_bodies.
 
 Returns the command's exit code: 0, or 130/143 when SIGINT/SIGTERM stopped it after a frame (the
 run can be continued with resume=True). Raises softbake.Error with the command's message when it

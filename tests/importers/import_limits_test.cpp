@@ -1,13 +1,26 @@
 // Caps on what one mesh file may bring in and on how many bodies a scene may have: each refusal
-// names the file (or the scene's key) and says how to raise the cap.
+// names the file (or the scene's key) and says how to raise the cap. The time and memory limits
+// hold the process that reads a file with assimp (assimp_snapshot.hpp).
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <memory>
+#include <new>
+#include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
 #include "core/text.hpp"
+#include "importers/assimp_snapshot.hpp"
+#include "importers/memory_budget.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
@@ -35,6 +48,47 @@ std::string errorOf(Load&& load) {
 SceneFile sceneOf(const std::string& json, const SceneLoadOptions& options = {}) {
   return parseScene(nlohmann::json::parse(json), "scene.json", ".", options);
 }
+
+// A reader that waits instead of reading: a file that takes assimp long. A minute at most, so a
+// build that reads in this process (ThreadSanitizer) fails instead of hanging.
+const aiScene* waitingRead(Assimp::Importer&, unsigned) {
+  std::this_thread::sleep_for(std::chrono::seconds(60));
+  return nullptr;
+}
+
+// A reader that maps memory until it finds none: a file that asks assimp for ever more. 4 GiB at
+// most, untouched, so a build that reads in this process fails instead of taking the machine.
+const aiScene* greedyRead(Assimp::Importer&, unsigned) {
+  std::vector<std::unique_ptr<char[]>> blocks;
+  for (int block = 0; block < 64; ++block) {
+    blocks.emplace_back(new char[std::size_t(64) << 20]);
+    blocks.back()[0] = 1;
+  }
+  return nullptr;
+}
+
+// The same, as assimp's readers do it: the std::bad_alloc becomes the reader's error.
+const aiScene* greedyCatchingRead(Assimp::Importer& importer, unsigned flags) {
+  try {
+    greedyRead(importer, flags);
+  } catch (const std::bad_alloc&) {
+  }
+  return nullptr;
+}
+
+// One of the test hooks of assimp_snapshot.hpp, set for one test.
+class TestImports {
+ public:
+  TestImports(const char* variable, const char* value) : variable_(variable) {
+    ::setenv(variable, value, 1);
+  }
+  ~TestImports() { ::unsetenv(variable_); }
+  TestImports(const TestImports&) = delete;
+  TestImports& operator=(const TestImports&) = delete;
+
+ private:
+  const char* variable_;
+};
 
 TEST(ImportLimits, FacesAndVerticesAboveTheirCapsAreRefusedNamingTheFile) {
   ImportLimits limits;
@@ -86,6 +140,89 @@ TEST(ImportLimits, TheSceneSetsTheCapsAndTheCommandLineWins) {
   EXPECT_THAT(
       errorOf([&] { sceneOf(R"({"settings": {"import": {"max_memory_mib": 0}}, "bodies": []})"); }),
       StartsWith("scene.json: settings.import.max_memory_mib: expected an integer in [1, "));
+}
+
+TEST(ImportLimits, EveryImportHasATimeAndAMemoryLimitByDefault) {
+  EXPECT_EQ(ImportLimits().maxSeconds, 120u);
+  EXPECT_EQ(importMemoryBytes({}), physicalMemoryBytes() / 2);
+  EXPECT_EQ(importMemoryBytes({.maxMemoryBytes = 1024}), 1024u);
+  EXPECT_EQ(importMemoryLimitMessage("a.iqm", {}),
+            cat("a.iqm: reading the file took more memory than the import memory limit of ",
+                formatBytes(double(physicalMemoryBytes() / 2)),
+                ", half of this machine's memory (--max-import-memory or "
+                "settings.import.max_memory_mib raises it)"));
+}
+
+TEST(ImportLimits, AReadingPastTheTimeLimitIsKilledNamingTheLimit) {
+  EXPECT_EQ(
+      errorOf([] { takeAssimpSnapshotInChild(waitingRead, 0, "slow.obj", {.maxSeconds = 1}); }),
+      "slow.obj: reading the file took longer than the import time limit of 1 s "
+      "(--max-import-seconds or settings.import.max_seconds raises it)");
+  // The killed child was reaped: this process has no child left, not even a zombie.
+  errno = 0;
+  EXPECT_EQ(::waitpid(-1, nullptr, WNOHANG), -1);
+  EXPECT_EQ(errno, ECHILD);
+}
+
+TEST(ImportLimits, TheSceneSetsTheTimeLimitAndTheCommandLineWins) {
+  const TestImports stalled("SOFTBAKE_TEST_IMPORT_STALL_SECONDS", "60");
+  const std::string scene =
+      cat(R"({"settings": {"import": {"max_seconds": 1}}, "bodies": [{"mesh": ")", box().string(),
+          R"("}]})");
+  EXPECT_EQ(errorOf([&] { sceneOf(scene); }),
+            "scene.json: bodies[0].mesh: " + box().string() +
+                ": reading the file took longer than the import time limit of 1 s "
+                "(--max-import-seconds or settings.import.max_seconds raises it)");
+  EXPECT_THAT(errorOf([&] { sceneOf(scene, {.maxImportSeconds = 2}); }),
+              HasSubstr(": reading the file took longer than the import time limit of 2 s "));
+  EXPECT_THAT(
+      errorOf([&] { sceneOf(R"({"settings": {"import": {"max_seconds": 0}}, "bodies": []})"); }),
+      StartsWith("scene.json: settings.import.max_seconds: expected an integer in [1, "));
+}
+
+TEST(ImportLimits, AnAllocationPastTheMemoryLimitFailsNamingTheLimit) {
+  const ImportLimits limits{.maxMemoryBytes = std::uint64_t(256) << 20};
+  const std::string message =
+      "greedy.obj: reading the file took more memory than the import memory limit of 256.0 MiB "
+      "(--max-import-memory or settings.import.max_memory_mib raises it)";
+  EXPECT_EQ(errorOf([&] { takeAssimpSnapshotInChild(greedyRead, 0, "greedy.obj", limits); }),
+            message);
+  EXPECT_EQ(
+      errorOf([&] { takeAssimpSnapshotInChild(greedyCatchingRead, 0, "greedy.obj", limits); }),
+      message);
+  // The limit is on what the reading adds to the process: an ordinary file reads well within it.
+  EXPECT_EQ(importMeshFile(box(), {.limits = limits}).meshes.at(0).triangles.size(), 12u);
+}
+
+// Past what the machine can give, before the limit: the kernel's out-of-memory killer ends the
+// reading with SIGKILL, which softbake did not send.
+TEST(ImportLimits, AReadingKilledByTheSystemIsSaidToHaveLackedMemory) {
+  const AssimpRead killed = [](Assimp::Importer&, unsigned) -> const aiScene* {
+    ::raise(SIGKILL);
+    return nullptr;
+  };
+  EXPECT_EQ(errorOf([&] {
+              takeAssimpSnapshotInChild(killed, 0, "big.obj",
+                                        {.maxMemoryBytes = std::uint64_t(1) << 30});
+            }),
+            "big.obj: the process reading the file was killed (Killed), most likely by the system "
+            "for lack of memory: the import memory limit of 1.0 GiB is more than this machine "
+            "could give it (--max-import-memory or settings.import.max_memory_mib lowers it)");
+}
+
+TEST(ImportLimits, TheSceneSetsTheMemoryLimitOfTheReadingAndTheCommandLineWins) {
+  const TestImports allocating("SOFTBAKE_TEST_IMPORT_ALLOCATE_MIB", "1024");
+  const std::string scene =
+      cat(R"({"settings": {"import": {"max_memory_mib": 256}}, "bodies": [{"mesh": ")",
+          box().string(), R"("}]})");
+  EXPECT_EQ(errorOf([&] { sceneOf(scene); }),
+            "scene.json: bodies[0].mesh: " + box().string() +
+                ": reading the file took more memory than the import memory limit of 256.0 MiB "
+                "(--max-import-memory or settings.import.max_memory_mib raises it)");
+  EXPECT_THAT(errorOf([&] { sceneOf(scene, {.maxImportMemoryMib = 128}); }),
+              HasSubstr(": reading the file took more memory than the import memory limit of "
+                        "128.0 MiB "));
+  EXPECT_EQ(sceneOf(scene, {.maxImportMemoryMib = 2048}).setup.bodies.size(), 1u);
 }
 
 // Found by fuzzing: a few lines asking for many finely subdivided spheres took all the memory
