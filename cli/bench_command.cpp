@@ -313,13 +313,14 @@ int bench(const BenchOptions& options) {
         "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f "
-        "max_volume_error=%.4f\n",
+        "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
-        double(record.solverIterations) / double(steps), record.maxVolumeError);
+        double(record.solverIterations) / double(steps), record.maxVolumeError,
+        simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size());
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record);
   }

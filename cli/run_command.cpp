@@ -83,11 +83,26 @@ void describeInitialOverlaps(const Simulator& simulator) {
                       topology.surfaceName(overlap.secondSurface), "'");
     list += cat(" (", overlap.trianglePairs, " triangle pairs)");
   }
-  const bool ignore = topology.settings.collisions.initialOverlap == InitialOverlapMode::Ignore;
-  std::printf("warning: surfaces intersect at the start: %s; %s\n", list.c_str(),
-              ignore ? "those surfaces never collide with each other (initial_overlap \"ignore\")"
-                     : "they are taken apart over the first frames, two bodies moved as wholes "
-                       "without velocity (initial_overlap \"separate\"; \"ignore\" glues them)");
+  std::string what;
+  switch (topology.settings.collisions.initialOverlap) {
+    case InitialOverlapMode::SetAside:
+      what = cat("those ", simulator.initiallySetAsidePairs(),
+                 " triangle pairs are set aside until they come apart; everything else collides "
+                 "(initial_overlap \"set_aside\"; \"separate\" moves bodies apart, \"ignore\" "
+                 "glues them)");
+      break;
+    case InitialOverlapMode::Separate:
+      what =
+          cat("two bodies are taken apart over the first frames, moved as wholes without "
+              "velocity; a body's own ",
+              simulator.initiallySetAsidePairs(),
+              " pairs are set aside (initial_overlap \"separate\"; \"ignore\" glues them)");
+      break;
+    case InitialOverlapMode::Ignore:
+      what = "those surfaces never collide with each other (initial_overlap \"ignore\")";
+      break;
+  }
+  std::printf("warning: surfaces intersect at the start: %s; %s\n", list.c_str(), what.c_str());
 }
 
 /// The scene's size, its substeps and its collision setup, on stdout; with `quiet`, only what
@@ -168,7 +183,8 @@ struct BakeResult {
 /// or the simulation fails.
 BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int checkpointEvery,
                 std::optional<std::size_t> cacheSink, FramePipeline& pipeline,
-                ProgressDisplay& progress, const InterruptionGuard& interruption) {
+                ProgressDisplay& progress, const InterruptionGuard& interruption,
+                std::vector<std::uint64_t>& setAsidePairs) {
   const SimulationState& state = simulator.state();
   const SimulationSettings& settings = simulator.topology().settings;
   BakeResult result;
@@ -186,6 +202,7 @@ BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int
         break;
       }
       const StepStats& stats = simulator.lastFrameStats();
+      if (!setAsidePairs.empty()) setAsidePairs[std::size_t(frame - 1)] = stats.setAsidePairs;
       totals.contacts += stats.contacts;
       totals.planeContacts += stats.planeContacts;
       totals.responses.particleResponses += stats.responses.particleResponses;
@@ -363,6 +380,12 @@ int run(const RunOptions& options) {
   const int firstFrame = plan.firstIncompleteFrame > frames
                              ? frames + 1  // nothing is missing: nothing to simulate
                              : restoreForResume(manifest, plan, cache, simulator);
+  if (simulator.initiallySetAsidePairs() > 0) {
+    // A resumed run keeps the counts of the frames it does not simulate again.
+    if (options.resume) everything.setAsidePairs = readManifest(options.out).setAsidePairs;
+    everything.setAsidePairs.resize(std::size_t(frames), 0);
+    everything.setAsidePairs[0] = simulator.initiallySetAsidePairs();
+  }
   everything.run = record;
   everything.status = RunStatus::Incomplete;
   everything.reason = manifest.reason;
@@ -391,7 +414,7 @@ int run(const RunOptions& options) {
     {
       FramePipeline pipeline(std::move(sinks), topology.particleCount());
       result = bake(simulator, firstFrame, plan, checkpointEvery, cacheSink, pipeline, progress,
-                    interruption);
+                    interruption, everything.setAsidePairs);
       pipeline.finish();
       bytesWritten = pipeline.bytesWritten();
     }
@@ -478,6 +501,12 @@ int run(const RunOptions& options) {
         result.totals.planeContacts);
   else if (!simulator.topology().planes.empty())
     std::printf("plane contacts over all substeps: %zu\n", result.totals.planeContacts);
+  if (!everything.setAsidePairs.empty())
+    std::printf(
+        "initial overlaps: %zu triangle pairs set aside at the start, %llu still at frame %d "
+        "(per frame in the manifest's set_aside_pairs)\n",
+        simulator.initiallySetAsidePairs(),
+        static_cast<unsigned long long>(everything.setAsidePairs.back()), frames);
   for (const OutputSequence& sequence : manifest.sequences)
     std::printf("%s sequence: %s\n", sequence.format.c_str(),
                 (options.out / sequence.pattern).string().c_str());

@@ -35,10 +35,20 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     failsafe_.emplace(*topology_);
   if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
-  } else if (collides_ && collisions.response != ResponseMode::None && !initialOverlaps_.empty()) {
-    detangler_.emplace(*topology_);
-    nameTangledSurfaces(initialOverlaps_);
+  } else if (collisions.initialOverlap == InitialOverlapMode::SetAside) {
+    initiallySetAside_ = initialOverlaps_.pairs;
+  } else {
+    // "separate": a body cannot be moved apart from itself, so its own pairs are set aside.
+    const std::vector<Index>& surfaceOf = topology_->collision.triangleSurface;
+    for (const TrianglePair& pair : initialOverlaps_.pairs)
+      if (surfaceOf[pair.first] == surfaceOf[pair.second]) initiallySetAside_.push_back(pair);
+    if (collides_ && collisions.response != ResponseMode::None &&
+        initiallySetAside_.size() < initialOverlaps_.pairs.size()) {
+      detangler_.emplace(*topology_);
+      nameTangledSurfaces(initialOverlaps_);
+    }
   }
+  detector_.setAside(initiallySetAside_);
   const IntegratorKind integrator = topology_->settings.integrator;
   if (integrator == IntegratorKind::Implicit) {
     implicit_.emplace(*topology_);
@@ -149,12 +159,26 @@ void Simulator::beginFrame() {
   // apart.
   if ((failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any()))
     nameTangledSurfaces(findInitialOverlaps(*topology_, state_.position));
+  // The pairs set aside at the start that still intersect stay set aside; those found apart
+  // collide from now on.
+  updateSetAside();
+  stats_.setAsidePairs = detector_.setAsidePairs().size();
   if (substeps_.stableAtAnyStep && substeps_.automatic) chooseContactAccuracySubsteps();
 }
 
 void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
-  if (failsafe_) failsafe_->leaveTangled(overlaps);
-  if (detangler_) detangler_->setTangled(*topology_, overlaps);
+  // Only pairs of different surfaces: a surface's own pairs are set aside one by one.
+  InitialOverlaps between;
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
+    if (overlap.firstSurface != overlap.secondSurface) between.bySurfaces.push_back(overlap);
+  if (failsafe_) failsafe_->leaveTangled(between);
+  if (detangler_) detangler_->setTangled(*topology_, between);
+}
+
+void Simulator::updateSetAside() {
+  if (initiallySetAside_.empty()) return;
+  stillIntersecting(*topology_, state_.position, initiallySetAside_, setAsideScratch_);
+  detector_.setAside(setAsideScratch_);
 }
 
 void Simulator::advanceToFrame(int frame) {
@@ -207,6 +231,8 @@ void Simulator::restore(const SimulationCheckpoint& checkpoint) {
   // (beginFrame), so whether any were is all that carries over.
   nameTangledSurfaces(checkpoint.tangled ? findInitialOverlaps(*topology_, state_.position)
                                          : InitialOverlaps{});
+  // Set aside: a function of the positions alone (updateSetAside()), so nothing to carry.
+  updateSetAside();
   stepsTaken_ = checkpoint.stepsTaken;
 }
 

@@ -44,6 +44,9 @@ struct StepStats {
   CollisionResponseStats responses;  ///< summed over the substeps
   FailsafeStats failsafe;            ///< summed over the substeps
   std::size_t detangledBodies = 0;   ///< bodies the Detangler moved, summed over the substeps
+  /// Triangle pairs set aside during the frame: of those that intersected at the start, the ones
+  /// that still did at the frame's start (initial_overlap "set_aside").
+  std::size_t setAsidePairs = 0;
 };
 
 class Simulator {
@@ -82,6 +85,10 @@ class Simulator {
   /// The triangle pairs that intersect at the start, found when the simulator was made; what is
   /// done with them is settings.collisions.initial_overlap.
   const InitialOverlaps& initialOverlaps() const { return initialOverlaps_; }
+  /// The triangle pairs the collision stages leave alone now (initial_overlap "set_aside"), sorted.
+  const std::vector<TrianglePair>& setAsidePairs() const { return detector_.setAsidePairs(); }
+  /// How many pairs were set aside at the start.
+  std::size_t initiallySetAsidePairs() const { return initiallySetAside_.size(); }
   /// Whether the scene has anything the collision pipeline could find (two surfaces, or one
   /// that self-collides); planes are handled on their own.
   bool collides() const { return collides_; }
@@ -112,6 +119,8 @@ class Simulator {
   [[noreturn]] void reportBlowUp(int frame) const;
   /// Tells the failsafe and the detangler which surfaces intersect where this frame starts.
   void nameTangledSurfaces(const InitialOverlaps& overlaps);
+  /// Sets aside those of the pairs set aside at the start that intersect now.
+  void updateSetAside();
   void chooseContactAccuracySubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
@@ -130,6 +139,9 @@ class Simulator {
   /// Set when bodies start inside each other under initial_overlap "separate".
   std::optional<Detangler> detangler_;
   InitialOverlaps initialOverlaps_;
+  /// The triangle pairs set aside at the start (all that intersected under "set_aside", a body's
+  /// own under "separate"), sorted; and scratch for those still set aside.
+  std::vector<TrianglePair> initiallySetAside_, setAsideScratch_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
   /// Contacts the next implicit step holds. Like the implicit integrator's warm start, they carry

@@ -280,8 +280,8 @@ class SceneParser {
     };
     if (value.isString()) return preset(value);
     if (!value.isObject()) value.fail("expected string (a preset) or object");
-    const JsonObject object =
-        value.object({"preset", "stiffness", "bend_stiffness", "damping", "pressure", "thickness"});
+    const JsonObject object = value.object({"preset", "stiffness", "bend_stiffness", "damping",
+                                            "pressure", "thickness", "bulk_modulus"});
     Material material = *findMaterialPreset("rubber");
     if (auto name = object.find("preset")) material = preset(*name);
     if (auto k = object.find("stiffness")) material.stiffness = Scalar(k->numberAbove(0));
@@ -290,6 +290,7 @@ class SceneParser {
     if (auto d = object.find("damping")) material.damping = Scalar(d->numberIn(0, 1));
     if (auto p = object.find("pressure")) material.pressure = Scalar(p->numberAtLeast(0));
     if (auto t = object.find("thickness")) material.thickness = Scalar(t->numberAtLeast(0));
+    if (auto k = object.find("bulk_modulus")) material.bulkModulus = Scalar(k->numberAtLeast(0));
     return material;
   }
 

@@ -85,8 +85,9 @@ std::string manifestJson(const Manifest& manifest) {
                    {"units", manifest.units},
                    {"bodies", std::move(bodies)},
                    {"sequences", std::move(sequences)},
-                   {"point_caches", std::move(pointCaches)},
-                   {"run", manifest.run}});
+                   {"point_caches", std::move(pointCaches)}});
+  if (!manifest.setAsidePairs.empty()) json["set_aside_pairs"] = manifest.setAsidePairs;
+  json["run"] = manifest.run;
   // Names come from user files; invalid UTF-8 is replaced rather than failing the whole run.
   return json.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
@@ -146,6 +147,8 @@ Manifest readManifest(const std::filesystem::path& outputDirectory) {
         manifest.pointCaches.push_back({text("body"), text("mesh"), text("pc2"), text("mdd")});
         manifest.pointCacheUp = cache.value("up", std::string("y"));
       }
+    if (json.contains("set_aside_pairs"))
+      manifest.setAsidePairs = json["set_aside_pairs"].get<std::vector<std::uint64_t>>();
     manifest.run = field("run");
   } catch (const nlohmann::json::exception& error) {
     throw Error(cat(path.string(), ": ", error.what()));

@@ -60,6 +60,9 @@ struct Manifest {
   std::vector<OutputSequence> sequences;
   std::vector<ManifestPointCache> pointCaches;
   std::string pointCacheUp = "y";  ///< the axis the point caches and rest meshes hold as up
+  /// Per frame (index frame − 1): the triangle pairs that intersected at the start and were still
+  /// set aside on that frame (initial_overlap); empty when none intersected.
+  std::vector<std::uint64_t> setAsidePairs;
   /// What the run was made from and with (its input files' SHA-256, its options), as the command
   /// records it for `--resume` and `export`; opaque here.
   nlohmann::ordered_json run = nlohmann::ordered_json::object();

@@ -155,6 +155,10 @@ void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
 void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
                                          std::vector<TrianglePair>& pairs) const {
   dropSurfacePairs(geometry, ignoredSurfaces_, pairs);
+  if (!setAside_.empty())
+    std::erase_if(pairs, [&](const TrianglePair& pair) {
+      return std::binary_search(setAside_.begin(), setAside_.end(), pair);
+    });
 }
 
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
@@ -170,6 +174,27 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
   if (clock) clock->lap(Stage::BroadPhase);
   findContacts(topology, motion);
   if (clock) clock->lap(Stage::NarrowPhase);
+}
+
+void CollisionDetector::dropTangledContacts(const SceneTopology& topology,
+                                            const SubstepMotion& motion) {
+  const CollisionGeometry& geometry = topology.collision;
+  TrianglePairHits hits;
+  const auto intersectedAtStart = [&](Index t, Index u) {
+    for (Index v : geometry.triangleVertices[u])
+      if (hasVertex(geometry.triangleVertices[t], v)) return false;
+    return intersectTrianglePair(geometry.corners(motion.start, t),
+                                 geometry.corners(motion.start, u), hits);
+  };
+  std::erase_if(edgeContacts_, [&](const EdgeContact& contact) {
+    return intersectedAtStart(contact.edgeTriangle, contact.triangle);
+  });
+  std::erase_if(particleContacts_, [&](const ParticleContact& contact) {
+    for (Index r = topology.triangleRowStart[contact.particle];
+         r < topology.triangleRowStart[contact.particle + 1]; ++r)
+      if (intersectedAtStart(topology.triangleRefs[r], contact.triangle)) return true;
+    return false;
+  });
 }
 
 void CollisionDetector::findContacts(const SceneTopology& topology, const SubstepMotion& motion) {
@@ -260,6 +285,7 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
   const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
     return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
   };
+  if (!setAside_.empty()) dropTangledContacts(topology, motion);
   // Each (particle, triangle) was tested from one pair only, so the hits are unique already.
   std::sort(particleContacts_.begin(), particleContacts_.end(), byParticleTriangle);
   // Hits are sorted by particle, so each particle's contacts are adjacent; within one

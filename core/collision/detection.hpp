@@ -55,8 +55,15 @@ class CollisionDetector {
   /// Under initial_overlap "ignore": two surfaces (or one with itself) that intersected at the
   /// start never collide with each other; every other pair of surfaces still does.
   void ignoreOverlaps(const InitialOverlaps& overlaps);
-  /// Removes from `pairs` those between surfaces that ignoreOverlaps() made ignore each other.
+  /// Removes from `pairs` those between surfaces that ignoreOverlaps() made ignore each other, and
+  /// the pairs set aside (setAside()).
   void dropIgnoredPairs(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
+  /// Triangle pairs that this stage and the failsafe leave alone (initial_overlap "set_aside":
+  /// those that intersected at the start, until found apart), sorted. Replaces the previous ones.
+  void setAside(std::span<const TrianglePair> pairs) {
+    setAside_.assign(pairs.begin(), pairs.end());
+  }
+  const std::vector<TrianglePair>& setAsidePairs() const { return setAside_; }
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sets what candidatePairs() returns until the next detect(): a resumed run's latest substep's
@@ -82,6 +89,10 @@ class CollisionDetector {
 
  private:
   void findContacts(const SceneTopology& topology, const SubstepMotion& motion);
+  /// Where pairs are set aside, the overlap may slide as the bodies deform: a contact whose
+  /// triangles (a particle's, for a particle contact) intersected at the substep's start is part
+  /// of it, and left alone like the pairs set aside.
+  void dropTangledContacts(const SceneTopology& topology, const SubstepMotion& motion);
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of
@@ -89,6 +100,7 @@ class CollisionDetector {
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;
   std::vector<std::pair<Index, Index>> ignoredSurfaces_;  ///< surface pairs that overlapped, sorted
+  std::vector<TrianglePair> setAside_;                    ///< triangle pairs left alone, sorted
   std::vector<std::vector<ParticleContact>> chunkHits_;   ///< particle hits, per chunk of pairs
   std::vector<std::vector<EdgeContact>> chunkEdges_;      ///< edge hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;

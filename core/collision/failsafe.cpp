@@ -22,6 +22,12 @@ constexpr std::size_t kChunks = 128;
 /// above single precision's rounding at scene scale and well below what the response keeps.
 constexpr double kToleranceOfSkin = 0.01;
 constexpr double kSeparationOfSkin = 0.1;
+/// An open body's thickness is at most this fraction of its short edges (kShortEdgeShare of them
+/// are shorter): a sheet's own vertices closer than its thickness would be pushed apart in every
+/// substep. A tube of 0.26 mm strips under the default 0.5 mm held the failsafe at its last stage
+/// in every substep.
+constexpr double kThicknessOfShortEdge = 0.25;
+constexpr double kShortEdgeShare = 0.05;
 
 PointPath path(const CollisionGeometry& geometry, std::span<const Vec3> start,
                std::span<const Vec3> end, Index v) {
@@ -34,6 +40,19 @@ bool lessImpact(const FailsafeImpact& a, const FailsafeImpact& b) {
 
 bool sameImpact(const FailsafeImpact& a, const FailsafeImpact& b) {
   return a.edge == b.edge && a.vertex == b.vertex;
+}
+
+/// The length that a share kShortEdgeShare of a body's edges are shorter than.
+double shortEdge(const SceneTopology& topology, const Body& body) {
+  std::vector<double> lengths;
+  for (const Triangle& t : topology.bodyTriangles(body))
+    for (int k = 0; k < 3; ++k)
+      lengths.push_back(
+          double((topology.restPosition[t[(k + 1) % 3]] - topology.restPosition[t[k]]).norm()));
+  if (lengths.empty()) return 0;
+  const auto at = lengths.begin() + std::ptrdiff_t(kShortEdgeShare * double(lengths.size() - 1));
+  std::nth_element(lengths.begin(), at, lengths.end());
+  return *at;
 }
 
 /// The skin the tolerances are fractions of; with no skin, a ten-thousandth of the scene's size.
@@ -56,7 +75,8 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology, FailsafePass
   margin_ = tolerance_;
   for (std::size_t b = 0; b < topology.bodies.size(); ++b)
     if (!topology.bodies[b].closed) {
-      thickness_[b] = double(topology.bodies[b].material.thickness);
+      thickness_[b] = std::min(double(topology.bodies[b].material.thickness),
+                               kThicknessOfShortEdge * shortEdge(topology, topology.bodies[b]));
       margin_ = std::max(margin_, thickness_[b]);
     }
   const std::size_t triangles = geometry.triangleVertices.size();
@@ -251,9 +271,63 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
   std::erase_if(impacts_, [&](const FailsafeImpact& impact) {
-    return intersectedAtStart(topology, start, impact);
+    return startsInside(topology, start, impact) ||
+           (closeAtRest(topology, impact) && !crosses(geometry, start, end, impact)) ||
+           intersectedAtStart(topology, start, impact);
   });
   return !impacts_.empty();
+}
+
+bool CollisionFailsafe::closeAtRest(const SceneTopology& topology,
+                                    const FailsafeImpact& impact) const {
+  const CollisionGeometry& geometry = topology.collision;
+  std::array<Vec3d, 4> rest;
+  for (int k = 0; k < 4; ++k)
+    rest[k] = geometry.vertex(topology.restPosition, impact.vertex[k]).cast<double>();
+  double distance = 0;
+  if (!impact.edge) {
+    const Vec3d w = closestPointBarycentric(rest[0], rest[1], rest[2], rest[3]);
+    distance = (rest[0] - (w[0] * rest[1] + w[1] * rest[2] + w[2] * rest[3])).norm();
+  } else {
+    const std::array<double, 2> s = closestSegmentParameters(rest[0], rest[1], rest[2], rest[3]);
+    distance =
+        ((rest[0] + s[0] * (rest[1] - rest[0])) - (rest[2] + s[1] * (rest[3] - rest[2]))).norm();
+  }
+  return distance < impact.separation;
+}
+
+bool CollisionFailsafe::crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
+                                std::span<const Vec3> end, const FailsafeImpact& impact) {
+  // The side of the second primitive the first is on, at the start and at the end: along the
+  // face's normal, or along the two edges' cross product.
+  const auto side = [&](std::span<const Vec3> at) {
+    std::array<Vec3d, 4> x;
+    for (int k = 0; k < 4; ++k) x[k] = geometry.vertex(at, impact.vertex[k]).cast<double>();
+    if (!impact.edge) return (x[0] - x[1]).dot((x[2] - x[1]).cross(x[3] - x[1]));
+    const std::array<double, 2> s = closestSegmentParameters(x[0], x[1], x[2], x[3]);
+    const Vec3d between = (x[0] + s[0] * (x[1] - x[0])) - (x[2] + s[1] * (x[3] - x[2]));
+    return between.dot((x[1] - x[0]).cross(x[3] - x[2]));
+  };
+  const double before = side(start), after = side(end);
+  return (before > 0 && after < 0) || (before < 0 && after > 0);
+}
+
+bool CollisionFailsafe::startsInside(const SceneTopology& topology, std::span<const Vec3> start,
+                                     const FailsafeImpact& impact) const {
+  const CollisionGeometry& geometry = topology.collision;
+  if (impact.edge) return false;
+  const Index surface = geometry.triangleSurface[impact.face];
+  if (surface >= topology.bodies.size() || !topology.bodies[surface].closed) return false;
+  // A body's own surface may not pass through itself from inside either (a ball pressed flat).
+  const Index vertex = impact.vertex[0];
+  if (vertex < geometry.particleCount && topology.particleBody[vertex] == surface) return false;
+  // The side of the face's plane the vertex starts on: the meeting is the first time the two come
+  // within the tolerance, so the vertex stays on that side until then, and comes from behind the
+  // face (the faces wind counter-clockwise seen from outside) only from inside the body.
+  const std::array<Vec3, 3> c = geometry.corners(start, impact.face);
+  const Vec3d a = c[0].cast<double>();
+  const Vec3d p = geometry.vertex(start, impact.vertex[0]).cast<double>();
+  return (p - a).dot((c[1].cast<double>() - a).cross(c[2].cast<double>() - a)) < 0;
 }
 
 bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,

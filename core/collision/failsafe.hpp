@@ -27,6 +27,19 @@
 /// 3. Should that still leave meetings after many passes, every particle stays where the substep
 ///    started: the state that was free of crossings. Counted, never expected.
 ///
+/// A meeting of two primitives that were closer than the separation in the scene's initial state
+/// (a mesh finer than the skin, a sheet thinner than its thickness, parts of an assembly fitted
+/// tighter than the skin) is left alone unless one passes through the other: the scene was made
+/// so, and holding them apart would push the bodies away from their shapes and fits, and each
+/// push into the next fit (an engine of 115 parts held the failsafe at its last stage in every
+/// substep).
+///
+/// A vertex–face meeting whose vertex comes from behind another closed body's face (from inside
+/// that body) is left alone: it is
+/// already a tangle, set aside or left from the start, and holding it would hold the body inside;
+/// letting it go lets the point leave. Nothing outside a closed body is ever let in by this, since
+/// a point reaches the inside only by crossing a face from its front.
+///
 /// Surfaces that intersect each other are not held apart: holding them would hold them in their
 /// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
 /// while any are left, and the detangler (core/collision/detangle.hpp) or the paper's response
@@ -54,6 +67,7 @@
 namespace softbake {
 
 struct SceneTopology;
+struct CollisionGeometry;
 struct SimulationState;
 class CollisionDetector;
 
@@ -107,6 +121,17 @@ class CollisionFailsafe {
                    std::span<const Vec3> start, std::span<const Vec3> end, bool onlyMoved);
   bool intersectedAtStart(const SceneTopology& topology, std::span<const Vec3> start,
                           const FailsafeImpact& impact) const;
+  /// Whether the meeting's primitives were closer than its separation in the scene's initial
+  /// state: a mesh finer than the skin, a part thinner than it, parts of an assembly fitted tighter
+  /// than it were made that close.
+  bool closeAtRest(const SceneTopology& topology, const FailsafeImpact& impact) const;
+  /// Whether the meeting's first primitive ends the substep on the other side of the second.
+  static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
+                      std::span<const Vec3> end, const FailsafeImpact& impact);
+  /// Whether a vertex–face meeting's vertex comes from inside another closed body: from behind the
+  /// face.
+  bool startsInside(const SceneTopology& topology, std::span<const Vec3> start,
+                    const FailsafeImpact& impact) const;
   void applyImpulses(const SceneTopology& topology, SimulationState& state, double dt);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles

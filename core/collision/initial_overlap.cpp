@@ -1,5 +1,9 @@
 #include "core/collision/initial_overlap.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <map>
 
 #include "core/collision/triangle_pair_intersection.hpp"
@@ -24,22 +28,43 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
   std::vector<TrianglePair> candidates;
   makeBroadPhase(BroadPhaseKind::Bvh)->findPairs(input, candidates);
 
+  std::sort(candidates.begin(), candidates.end());
+  stillIntersecting(topology, positions, candidates, overlaps.pairs);
   std::map<std::pair<Index, Index>, std::size_t> bySurfaces;
-  TrianglePairHits hits;
-  for (const TrianglePair& pair : candidates) {
-    if (!intersectTrianglePair(geometry.corners(positions, pair.first),
-                               geometry.corners(positions, pair.second), hits))
-      continue;
-    overlaps.pairs.push_back(pair);
+  for (const TrianglePair& pair : overlaps.pairs)
     ++bySurfaces[{geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]}];
-  }
   for (const auto& [surfaces, count] : bySurfaces)
     overlaps.bySurfaces.push_back({surfaces.first, surfaces.second, count});
   return overlaps;
 }
 
+void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
+                       std::span<const TrianglePair> from, std::vector<TrianglePair>& out) {
+  const CollisionGeometry& geometry = topology.collision;
+  std::vector<char> intersects(from.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      TrianglePairHits hits;
+                      for (std::size_t k = range.begin(); k != range.end(); ++k)
+                        intersects[k] = intersectTrianglePair(
+                            geometry.corners(positions, from[k].first),
+                            geometry.corners(positions, from[k].second), hits);
+                    });
+  out.clear();
+  for (std::size_t k = 0; k < from.size(); ++k)
+    if (intersects[k]) out.push_back(from[k]);
+}
+
 std::string_view initialOverlapModeName(InitialOverlapMode mode) {
-  return mode == InitialOverlapMode::Ignore ? "ignore" : "separate";
+  switch (mode) {
+    case InitialOverlapMode::SetAside:
+      return "set_aside";
+    case InitialOverlapMode::Separate:
+      return "separate";
+    case InitialOverlapMode::Ignore:
+      return "ignore";
+  }
+  return "set_aside";
 }
 
 std::vector<std::string> initialOverlapModeNames() {

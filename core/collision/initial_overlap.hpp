@@ -8,16 +8,23 @@
 /// when some edge of one passes through the other.
 ///
 /// What happens to them is `settings.collisions.initial_overlap`:
-/// - "separate" (the default): two different bodies are moved apart as wholes, without velocity,
-///   over the first frames (core/collision/detangle.hpp), the response and the failsafe leaving
-///   them alone meanwhile; a body that crosses itself is resolved by the response like any other
-///   contact, the edge pushes moving a capped fraction of an edge per substep, so it comes apart
-///   over the first frames;
+/// - "set_aside" (the default): the intersecting triangle pairs are set aside. The narrow phase,
+///   the response and the failsafe leave them alone, and every other pair collides from the first
+///   step. At every frame's start the pairs set aside are tested again, and those found apart
+///   collide like any other pair from then on (Houdini Vellum and Marvelous Designer treat
+///   overlaps so). Nothing is pushed apart, so overlaps never store energy in the springs: an
+///   assembly whose parts overlap by design, or a mesh that crosses itself, bakes as it is. Near
+///   the set-aside pairs, the failsafe leaves alone a meeting whose own triangles intersect where
+///   its substep starts, so the overlap may slide as the bodies deform without new pairs being
+///   pushed.
+/// - "separate": two different bodies are moved apart as wholes, without velocity, over the first
+///   frames (core/collision/detangle.hpp), the response and the failsafe leaving them alone
+///   meanwhile. A body cannot be moved apart from itself: its own pairs are set aside.
 /// - "ignore": two surfaces that intersect at the start never collide with each other (parts
 ///   meant to stay glued; a body that crosses itself stops colliding with itself). Every other
-///   pair of surfaces still does. Ignoring only the triangle pairs that intersect was tried: the
-///   triangles around them, inside the other part but not crossing it, collided as soon as they
-///   moved, and pushed two glued balls 0.18 m apart within a second.
+///   pair of surfaces still does. Ignoring only the triangle pairs that intersect lets the
+///   triangles around them, inside the other part but not crossing it, collide with it as soon as
+///   they move: two glued balls were pushed 0.18 m apart within a second.
 
 #include <span>
 #include <string_view>
@@ -45,7 +52,12 @@ struct InitialOverlaps {
 /// The triangle pairs of `topology` that intersect with its particles at `positions`.
 InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions);
 
-/// "separate", "ignore".
+/// "set_aside", "separate", "ignore".
+
+/// The pairs of `from` (sorted) whose triangles intersect with the particles at `positions`, in
+/// order, into `out`.
+void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
+                       std::span<const TrianglePair> from, std::vector<TrianglePair>& out);
 std::string_view initialOverlapModeName(InitialOverlapMode mode);
 std::vector<std::string> initialOverlapModeNames();
 bool parseInitialOverlapMode(std::string_view name, InitialOverlapMode& mode);

@@ -25,10 +25,12 @@ Energy computeEnergy(const SceneTopology& topology, const SimulationState& state
   computeVolumes(topology, state, forces);
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
-    if (!body.closed || !(body.gasAmount > 0)) continue;
+    if (!body.closed) continue;
     // The pressure law is clamped at kMinVolumeFraction; so is its energy.
     const double volume = std::max(forces.bodyVolume[b], kMinVolumeFraction * body.restVolume);
-    energy.gas -= body.gasAmount * std::log(volume / body.restVolume);
+    if (body.gasAmount > 0) energy.gas -= body.gasAmount * std::log(volume / body.restVolume);
+    const double change = volume - body.restVolume;
+    energy.bulk += 0.5 * bulkStiffness(body) * change * change;
   }
   return energy;
 }

@@ -71,9 +71,7 @@ void computeVolumes(const SceneTopology& topology, const SimulationState& state,
 void computePressureForces(const SceneTopology& topology, const SimulationState& state,
                            ForceBuffers& forces) {
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
-    const Body& body = topology.bodies[b];
-    const double volume = std::max(forces.bodyVolume[b], kMinVolumeFraction * body.restVolume);
-    forces.bodyPressure[b] = body.gasAmount > 0 ? Scalar(body.gasAmount / volume) : Scalar(0);
+    forces.bodyPressure[b] = Scalar(bodyPressure(topology.bodies[b], forces.bodyVolume[b]));
   }
   const Triangle* triangles = topology.triangles.data();
   const Vec3* x = state.position.data();

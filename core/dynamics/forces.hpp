@@ -3,6 +3,7 @@
 /// Each function writes per-spring or per-triangle results into the stage's ForceBuffers; the
 /// integrator gathers them per particle.
 
+#include <algorithm>
 #include <vector>
 
 #include "core/scene/scene_topology.hpp"
@@ -40,8 +41,8 @@ inline Vec3 springForceOnA(const Spring& spring, const Vec3& d, Scalar length, c
 void computeVolumes(const SceneTopology& topology, const SimulationState& state,
                     ForceBuffers& forces);
 
-/// P = nRT/V per closed body, then the force P·A·n̂ of each triangle, a third on each corner.
-/// Needs computeVolumes() first.
+/// P = nRT/V + K·(1 − V/V_rest) per closed body (bodyPressure()), then the force P·A·n̂ of each
+/// triangle, a third on each corner. Needs computeVolumes() first.
 void computePressureForces(const SceneTopology& topology, const SimulationState& state,
                            ForceBuffers& forces);
 
@@ -77,5 +78,23 @@ inline Vec3 gravityAndPressureForce(const SceneTopology& topology, const ForceBu
 /// The smallest volume the pressure law is evaluated at, as a fraction of the rest volume: keeps
 /// P finite when a body is crushed flat or turned inside out for a moment.
 inline constexpr double kMinVolumeFraction = 1e-3;
+
+/// −dP/dV of a body's bulk term, K/V_rest, Pa/m³; 0 for a body without one (open, or a bulk
+/// modulus of 0). The implicit step takes this stiffness into its solve, XPBD into its volume push.
+inline double bulkStiffness(const Body& body) {
+  return body.closed && body.restVolume > 0 && body.material.bulkModulus > 0
+             ? double(body.material.bulkModulus) / body.restVolume
+             : 0.0;
+}
+
+/// A closed body's pressure at `volume`: the gas law's nRT/V, plus the bulk term
+/// K·(1 − V/V_rest) (Material::bulkModulus) where the body has one. V is clamped at
+/// kMinVolumeFraction of the rest volume for both.
+inline double bodyPressure(const Body& body, double volume) {
+  volume = std::max(volume, kMinVolumeFraction * body.restVolume);
+  const double gas = body.gasAmount > 0 ? body.gasAmount / volume : 0.0;
+  const double stiffness = bulkStiffness(body);
+  return stiffness > 0 ? gas + stiffness * (body.restVolume - volume) : gas;
+}
 
 }  // namespace softbake

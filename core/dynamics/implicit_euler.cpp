@@ -54,6 +54,31 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       bodyHeld_(topology.bodies.size(), 0) {
   static_assert(kChunk % SlicedSpringMatrix::kLanes == 0, "a chunk holds whole slices");
   held_.reserve(topology.particleCount());
+  const std::size_t n = topology.particleCount();
+  volumeBodyOf_.assign(topology.bodies.size(), kNoVolumeBody);
+  for (Index b = 0; b < topology.bodies.size(); ++b) {
+    const Body& body = topology.bodies[b];
+    if (!(bulkStiffness(body) > 0) || body.particleCount == 0) continue;
+    volumeBodyOf_[b] = Index(volumeBodies_.size());
+    // The body's particles, cut where a chunk ends.
+    for (std::size_t begin = body.firstParticle; begin < body.firstParticle + body.particleCount;) {
+      const std::size_t end = std::min<std::size_t>(body.firstParticle + body.particleCount,
+                                                    (begin / kChunk + 1) * kChunk);
+      volumeRuns_.push_back({Index(volumeBodies_.size()), Index(begin), Index(end)});
+      begin = end;
+    }
+    volumeBodies_.push_back(b);
+  }
+  if (!volumeBodies_.empty()) {
+    chunkRunStart_.assign(chunkSum_.size() + 1, 0);
+    for (const VolumeRun& run : volumeRuns_) ++chunkRunStart_[run.begin / kChunk + 1];
+    for (std::size_t c = 0; c < chunkSum_.size(); ++c) chunkRunStart_[c + 1] += chunkRunStart_[c];
+    triangleGradient_.assign(topology.triangles.size(), Vec3::Zero());
+    volumeGradient_.assign(n, Vec3::Zero());
+    runDot_.assign(volumeRuns_.size(), 0.0);
+    volumeCoefficient_.assign(volumeBodies_.size(), 0.0);
+    volumeScale_.assign(volumeBodies_.size(), 0);
+  }
   for (Index b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
     bool pinned = false;
@@ -110,6 +135,35 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
   });
 }
 
+void ImplicitEuler::sumVolumeDots(const Vec3* x, std::size_t chunk) {
+  for (std::size_t r = chunkRunStart_[chunk]; r < chunkRunStart_[chunk + 1]; ++r) {
+    double sum = 0;
+    for (Index i = volumeRuns_[r].begin; i < volumeRuns_[r].end; ++i)
+      sum += dot(volumeGradient_[i], x[i]);
+    runDot_[r] = sum;
+  }
+}
+
+double ImplicitEuler::finishVolumeDots() {
+  double curvature = 0;
+  std::size_t r = 0;
+  for (std::size_t k = 0; k < volumeBodies_.size(); ++k) {
+    double sum = 0;
+    for (; r < volumeRuns_.size() && volumeRuns_[r].volumeBody == k; ++r) sum += runDot_[r];
+    volumeScale_[k] = Scalar(volumeCoefficient_[k] * sum);
+    curvature += volumeCoefficient_[k] * sum * sum;
+  }
+  return curvature;
+}
+
+void ImplicitEuler::addVolumeProduct(Vec3* out, Scalar factor, std::size_t chunk) {
+  for (std::size_t r = chunkRunStart_[chunk]; r < chunkRunStart_[chunk + 1]; ++r) {
+    const Scalar scale = factor * volumeScale_[volumeRuns_[r].volumeBody];
+    for (Index i = volumeRuns_[r].begin; i < volumeRuns_[r].end; ++i)
+      out[i] += scale * volumeGradient_[i];
+  }
+}
+
 void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                              const SimulationState& state) {
   // The springs' forces, blocks and h²·K·v₀ terms, and each particle's diagonal block, in one
@@ -124,6 +178,23 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
   const std::size_t n = topology.particleCount();
   constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
   const Scalar h = dt;
+  const bool volume = !volumeBodies_.empty();
+  if (volume) {
+    for (std::size_t k = 0; k < volumeBodies_.size(); ++k)
+      volumeCoefficient_[k] =
+          double(h) * double(h) * bulkStiffness(topology.bodies[volumeBodies_[k]]);
+    // A third of each triangle's ∂V/∂x: (b − a)×(c − a)/6, as the pressure forces have it.
+    const Triangle* triangles = topology.triangles.data();
+    const Vec3* x = state.position.data();
+    Vec3* gradient = triangleGradient_.data();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.triangles.size(), 4096),
+                      [=](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                          const Triangle& tri = triangles[t];
+                          gradient[t] = (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]) / 6;
+                        }
+                      });
+  }
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, (n + kLanes - 1) / kLanes, kParticleGrain / kLanes),
       [&](const tbb::blocked_range<std::size_t>& slices) {
@@ -134,6 +205,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
           if (topology.inverseMass[i] == 0) {
             rhs_[i].setZero();
             inverseDiagonal_[i].setZero();
+            if (volume) volumeGradient_[i].setZero();  // the filter: a pinned row is empty
             continue;
           }
           Vec3 b = h * addPressureForces(topology, forces, Index(i), springForce_[i]);
@@ -143,10 +215,27 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
             b += Vec3(velocityTermX_[at], velocityTermY_[at], velocityTermZ_[at]);
           }
           rhs_[i] = b;
-          const Mat3 diagonal = inverseDiagonal_[i];
+          Mat3 diagonal = inverseDiagonal_[i];
+          const Index volumeBody = volume ? volumeBodyOf_[topology.particleBody[i]] : kNoVolumeBody;
+          if (volumeBody != kNoVolumeBody) {
+            Vec3 gradient = Vec3::Zero();
+            for (Index r = topology.triangleRowStart[i]; r < topology.triangleRowStart[i + 1]; ++r)
+              gradient += triangleGradient_[topology.triangleRefs[r]];
+            volumeGradient_[i] = gradient;
+            diagonal += Scalar(volumeCoefficient_[volumeBody]) * gradient * gradient.transpose();
+          }
           inverseDiagonal_[i] = diagonal.inverse();
         }
       });
+  if (volume) {
+    // The bulk terms' share of h²·K·v₀: −c·g·(g·v₀).
+    const std::size_t chunks = chunkSum_.size();
+    tbb::parallel_for(std::size_t(0), chunks,
+                      [&](std::size_t chunk) { sumVolumeDots(state.velocity.data(), chunk); });
+    finishVolumeDots();
+    tbb::parallel_for(std::size_t(0), chunks,
+                      [&](std::size_t chunk) { addVolumeProduct(rhs_.data(), -1, chunk); });
+  }
 }
 
 void ImplicitEuler::solve(const SceneTopology& topology) {
@@ -169,6 +258,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   Scalar alpha = 0, beta = 0;
   int iteration = 0;
   bool zeroRhs = false;
+  const bool volume = !volumeBodies_.empty();
   stats_ = {};
   const auto runPass = [&](std::size_t chunk) {
     const std::size_t begin = chunk * kChunk, end = std::min(n, (chunk + 1) * kChunk);
@@ -176,8 +266,10 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
     switch (pass) {
       case Pass::WarmProduct:
         matrix_.multiply(deltaV_.data(), product_.data(), inverseMass, begin, end);
+        if (volume) sumVolumeDots(deltaV_.data(), chunk);
         break;
       case Pass::Residual:
+        if (volume) addVolumeProduct(product_.data(), 1, chunk);
         for (std::size_t i = begin; i < end; ++i) {
           const Vec3 residual = rhs_[i] - product_[i];
           holdResidual_[i] = holdNormal_[i].dot(residual);
@@ -194,8 +286,10 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         break;
       case Pass::Product:
         first = matrix_.multiply(direction_.data(), product_.data(), inverseMass, begin, end);
+        if (volume) sumVolumeDots(direction_.data(), chunk);
         break;
       case Pass::Update: {
+        if (volume) addVolumeProduct(product_.data(), 1, chunk);
         // A held particle's product loses its normal part, the surface's, which its hold
         // residual takes; then Δv and the residual are two updates over plain arrays of
         // coordinates, which the compiler vectorises (the same operations, coordinate by
@@ -234,6 +328,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
     }
     switch (pass) {
       case Pass::WarmProduct:
+        if (volume) finishVolumeDots();
         pass = Pass::Residual;
         return true;
       case Pass::Residual:
@@ -249,7 +344,7 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         pass = Pass::Product;
         return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
       case Pass::Product: {
-        const double curvature = total.first;
+        const double curvature = volume ? total.first + finishVolumeDots() : total.first;
         alpha = Scalar(rz / curvature);
         pass = Pass::Update;
         return curvature > 0;  // else converged to rounding, or a degenerate direction

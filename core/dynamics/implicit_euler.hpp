@@ -37,6 +37,15 @@
 /// Coulomb friction slows the tangential velocity by μ times that impulse, and a particle whose
 /// impulse pulls it towards the surface is let go at the next step.
 ///
+/// A closed body with a bulk modulus (Material::bulkModulus) has the pressure P = nRT/V +
+/// K·(1 − V/V_rest), and its forces P·g_i (g_i = ∂V/∂x_i) change with the volume: their Jacobian
+/// holds −(K/V_rest)·g·gᵀ, one rank-one block per body. It enters the solve, which is what keeps a
+/// loaded body's volume at large steps; the change of g itself is left out, as for the gas. The
+/// product adds c·g·(g·p), c = h²·K/V_rest, which needs g·p over the body first: the product's pass
+/// sums it per run of a body's particles within a chunk, the serial step between passes per body
+/// (in chunk order, so for any thread count), and the next pass adds it. Rank one adds one
+/// eigenvalue to the system, which costs CG about one iteration however stiff the body is.
+///
 /// CG stops at a tolerance, and its residual's sum would change a body's momentum; that sum is
 /// removed per body (restoreMomentum), so internal forces conserve momentum to rounding.
 ///
@@ -116,6 +125,12 @@ class ImplicitEuler {
  private:
   void assemble(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                 const SimulationState& state);
+  /// The bulk terms (see above): g·x summed over each run of a body's particles in `chunk`.
+  void sumVolumeDots(const Vec3* x, std::size_t chunk);
+  /// The runs' sums per body, in order: sets volumeScale_ to c·(g·x) and returns Σ c·(g·x)².
+  double finishVolumeDots();
+  /// out_i += factor·c·(g·x)·g_i at the particles of `chunk`, with the latest finishVolumeDots().
+  void addVolumeProduct(Vec3* out, Scalar factor, std::size_t chunk);
   void solve(const SceneTopology& topology);
   /// Makes each body without pins or held particles change momentum by exactly its external
   /// impulse.
@@ -150,7 +165,22 @@ class ImplicitEuler {
   std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
   std::vector<char> isHeld_;              ///< per particle: it has a hold
   std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
-  int stepIterations_ = 0;                ///< CG iterations of the latest step's solves
+  /// The bulk terms: the bodies with one; per body its index among them (kNoVolumeBody if none);
+  /// the runs of their particles within a chunk, in particle order, and each chunk's first run;
+  /// per triangle a third of its ∂V/∂x, per particle g_i (zero where pinned); per run its latest
+  /// dot, per body c = h²·K/V_rest and c·(g·x) of the latest dots.
+  struct VolumeRun {
+    Index volumeBody;  ///< into volumeBodies_
+    Index begin, end;  ///< particles
+  };
+  static constexpr Index kNoVolumeBody = Index(-1);
+  std::vector<Index> volumeBodies_, volumeBodyOf_;
+  std::vector<VolumeRun> volumeRuns_;
+  std::vector<std::size_t> chunkRunStart_;
+  std::vector<Vec3> triangleGradient_, volumeGradient_;
+  std::vector<double> runDot_, volumeCoefficient_;
+  std::vector<Scalar> volumeScale_;
+  int stepIterations_ = 0;  ///< CG iterations of the latest step's solves
   ImplicitSolveStats stats_;
 };
 

@@ -28,6 +28,12 @@ struct Material {
   /// should stay well under the mesh's edge length: the sheet's own vertices closer than it would
   /// push each other apart.
   Scalar thickness = Scalar(0.0005);
+  /// Bulk modulus of what a closed body holds, Pa: the body resists a change of its volume V
+  /// with the pressure K·(1 − V/V_rest) on top of its gas's, so it keeps its volume under load as
+  /// jelly, rubber and flesh do (Jolt's and Vellum's volume constraints do the same). 0 leaves the
+  /// paper's gas law alone (P = nRT/V), under which a loaded body loses a large part of its volume:
+  /// the figure examples keep it. Ignored on open meshes.
+  Scalar bulkModulus = 40000;
 };
 
 struct NamedMaterial {

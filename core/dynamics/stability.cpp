@@ -6,10 +6,43 @@
 #include <limits>
 #include <vector>
 
+#include "core/dynamics/forces.hpp"
+
 namespace softbake {
+
+namespace {
+
+/// Per body, ω² of its bulk term's one mode at the rest shape: the largest eigenvalue of
+/// M⁻¹·(K/V_rest)·g·gᵀ, which is (K/V_rest)·Σ|g_i|²/m_i over the free particles (0 without one).
+std::vector<double> bulkModes(const SceneTopology& topology) {
+  std::vector<double> modes(topology.bodies.size(), 0.0);
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
+    const Body& body = topology.bodies[b];
+    const double stiffness = bulkStiffness(body);
+    if (!(stiffness > 0)) continue;
+    std::vector<Vec3d> gradient(body.particleCount, Vec3d::Zero());
+    for (const Triangle& t : topology.bodyTriangles(body)) {
+      const Vec3d a = topology.restPosition[t[0]].cast<double>();
+      const Vec3d third = (topology.restPosition[t[1]].cast<double>() - a)
+                              .cross(topology.restPosition[t[2]].cast<double>() - a) /
+                          6;
+      for (Index corner : t) gradient[corner - body.firstParticle] += third;
+    }
+    double sum = 0;
+    for (Index k = 0; k < body.particleCount; ++k)
+      sum += double(topology.inverseMass[body.firstParticle + k]) * gradient[k].squaredNorm();
+    modes[b] = stiffness * sum;
+  }
+  return modes;
+}
+
+}  // namespace
 
 StabilityBound computeStabilityBound(const SceneTopology& topology) {
   StabilityBound bound{std::numeric_limits<double>::infinity(), 0};
+  // The bulk term's mode adds to each of its body's particles' bound: the largest eigenvalue of a
+  // sum is at most the sum of the largest ones.
+  const std::vector<double> bulk = bulkModes(topology);
   for (Index i = 0; i < topology.particleCount(); ++i) {
     if (topology.inverseMass[i] == 0) continue;
     double stiffness = 0, damping = 0;
@@ -18,8 +51,10 @@ StabilityBound computeStabilityBound(const SceneTopology& topology) {
       stiffness += spring.stiffness;
       damping += spring.damping;
     }
-    if (stiffness <= 0 && damping <= 0) continue;
-    const double omegaSquared = 2 * stiffness * topology.inverseMass[i];
+    const double bulkMode = bulk[topology.particleBody[i]];
+    if (stiffness <= 0 && damping <= 0 && bulkMode <= 0) continue;
+    const double omegaSquared = bulkMode > 0 ? 2 * stiffness * topology.inverseMass[i] + bulkMode
+                                             : 2 * stiffness * topology.inverseMass[i];
     const double gamma = 2 * damping * topology.inverseMass[i];
     const double h = omegaSquared > 0
                          ? (std::sqrt(gamma * gamma + 4 * omegaSquared) - gamma) / omegaSquared
@@ -148,8 +183,10 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   }
   for (std::size_t a = 0; a < motion.size(); ++a) {
     if (!motion[a].moving) continue;
+    // Gravity moves a body's parts alike: only how they move apart from its mean brings a
+    // surface onto itself.
     if (geometry.surfaces[a].selfCollision && !inContact(a, a))
-      choice.closingSpeed = std::max(choice.closingSpeed, 2 * motion[a].deviation + gravitySpeed);
+      choice.closingSpeed = std::max(choice.closingSpeed, 2 * motion[a].deviation);
     for (std::size_t b = 0; b < motion.size(); ++b) {
       if (b == a || (motion[b].moving && b < a) || inContact(a, b)) continue;  // each pair once
       if (!motion[a].box.intersects(motion[b].box)) continue;

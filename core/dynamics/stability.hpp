@@ -5,7 +5,8 @@
 /// (the Jury conditions on its 2×2 amplification matrix). The stiffest mode of the whole network is
 /// bounded per particle by Gershgorin's theorem on M⁻¹K: ω² ≤ 2·Σk/m and likewise γ ≤ 2·Σc/m over
 /// the particle's springs. Solving for h gives h < (√(γ² + 4ω²) − γ)/ω². Gas pressure and contacts
-/// add much softer modes and are left out; the safety factor covers them.
+/// add much softer modes and are left out; the safety factor covers them. A body's bulk term
+/// (Material::bulkModulus) can be stiff, so its one mode is added to its particles' ω².
 
 #include <cstdint>
 #include <span>

@@ -53,7 +53,9 @@ Xpbd::Xpbd(const SceneTopology& topology)
   for (std::size_t c = 0; c < std::size_t(colours); ++c) colourStart_[c + 1] += colourStart_[c];
   // A spring without stiffness is no constraint (and its damping has nothing to scale by).
   for (Index b = 0; b < topology.bodies.size(); ++b)
-    if (topology.bodies[b].closed && topology.bodies[b].gasAmount > 0) gasBodies_.push_back(b);
+    if (topology.bodies[b].closed &&
+        (topology.bodies[b].gasAmount > 0 || bulkStiffness(topology.bodies[b]) > 0))
+      gasBodies_.push_back(b);
   constraints_.resize(colourStart_.back());
   std::vector<std::size_t> next(colourStart_.begin(), colourStart_.end() - 1);
   for (std::size_t s = 0; s < colour.size(); ++s) {
@@ -118,7 +120,9 @@ void Xpbd::pushGas(const SceneTopology& topology, Scalar dt, std::span<const Vec
   });
   // Per body, the gas as a compliant volume term: one Newton step on inertia plus the gas energy
   // −nRT·ln V along M⁻¹∇V, so the push is P/(1 + h²·(nRT/V²)·Σ w|∇V|²) rather than P: equal to
-  // the explicit force at small steps, never overshooting at large ones.
+  // the explicit force at small steps, never overshooting at large ones. The bulk term's energy
+  // K/(2·V_rest)·(V − V_rest)² enters the same step, its stiffness K/V_rest beside the gas's: the
+  // XPBD volume constraint C = V − V_rest with compliance V_rest/K.
   const double dtSquared = double(dt) * double(dt);
   tbb::parallel_for(std::size_t(0), gasBodies_.size(), [&](std::size_t k) {
     const Index b = gasBodies_[k];
@@ -127,9 +131,11 @@ void Xpbd::pushGas(const SceneTopology& topology, Scalar dt, std::span<const Vec
     for (Index i = body.firstParticle; i < body.firstParticle + body.particleCount; ++i)
       weightedSquares += double(topology.inverseMass[i]) * gradient[i].cast<double>().squaredNorm();
     const double volume = std::max(forces.bodyVolume[b], kMinVolumeFraction * body.restVolume);
-    const double pressure = body.gasAmount / volume;
-    const double gasStiffness = pressure / volume;
-    gasPush_[b] = pressure / (1 + gasStiffness * dtSquared * weightedSquares);
+    const double pressure = bodyPressure(body, volume);
+    const double gasStiffness = body.gasAmount / volume / volume;
+    const double bulk = bulkStiffness(body);
+    const double stiffness = bulk > 0 ? gasStiffness + bulk : gasStiffness;
+    gasPush_[b] = pressure / (1 + stiffness * dtSquared * weightedSquares);
     forces.bodyPressure[b] = Scalar(pressure);
   });
   const Index* particleBody = topology.particleBody.data();

@@ -8,7 +8,9 @@
 ///   1. Δ ← h·(v + h·g)  (inertia and gravity);
 ///   2. the gas as a compliant volume term: per closed body, Δ ← Δ + h²·w·p·∂V/∂x with
 ///      p = P/(1 + h²·(nRT/V²)·Σ w|∂V/∂x|²), one Newton step on the gas energy −nRT·ln V: the
-///      explicit pressure force at small steps, never overshooting at large ones;
+///      explicit pressure force at small steps, never overshooting at large ones; a body's bulk
+///      term (Material::bulkModulus) is a compliant volume constraint C = V − V_rest of
+///      compliance V_rest/K in the same step, its stiffness added to the gas's;
 ///   3. one Gauss–Seidel sweep over every spring as a distance constraint C = |x_b − x_a| − L with
 ///      compliance α = 1/k and Rayleigh damping β = c, so stiffness keeps N/m and damping N·s/m:
 ///        α̃ = α/h²,  γ = α̃·h²·β/h = c/(k·h),

@@ -36,8 +36,8 @@ struct BodySetup {
   Scalar mass = 1;               ///< kg for the whole body, spread over particles by vertex area
   Vec3 velocity = Vec3::Zero();  ///< initial velocity of every particle, m/s
   Pins pins;
-  /// Collide the body with itself. Unset: on for open meshes (a flag can fold onto itself), off
-  /// for closed ones (pressure keeps them from folding, and the test costs a second pass).
+  /// Collide the body with itself. Unset: on, open or closed (a flag folds onto itself, and a
+  /// closed body pressed into the ground or squeezed in a pile creases into itself).
   std::optional<bool> selfCollision;
 };
 
@@ -79,11 +79,14 @@ bool parseResponseMode(std::string_view name, ResponseMode& mode);
 /// What the collision stage does with surfaces that intersect at the start
 /// (core/collision/initial_overlap.hpp).
 enum class InitialOverlapMode {
-  Separate,  ///< resolved like any contact, over the first frames
+  /// The triangle pairs that intersect at the start are left alone until they are found apart;
+  /// every other pair collides from the first step (Vellum's and Marvelous Designer's way)
+  SetAside,
+  Separate,  ///< two bodies moved apart as wholes over the first frames
   Ignore,    ///< surfaces that intersect at the start never collide with each other (glued parts)
 };
-inline constexpr InitialOverlapMode kInitialOverlapModes[] = {InitialOverlapMode::Separate,
-                                                              InitialOverlapMode::Ignore};
+inline constexpr InitialOverlapMode kInitialOverlapModes[] = {
+    InitialOverlapMode::SetAside, InitialOverlapMode::Separate, InitialOverlapMode::Ignore};
 
 /// How a substep advances velocities and positions (core/dynamics/).
 enum class IntegratorKind {
@@ -115,7 +118,7 @@ struct CollisionSettings {
   /// (core/collision/pair_cache.hpp): identical results, the broad phase once every few dozen
   /// steps. Off runs the broad phase every step, to compare broad phases themselves.
   bool pairCache = true;
-  InitialOverlapMode initialOverlap = InitialOverlapMode::Separate;
+  InitialOverlapMode initialOverlap = InitialOverlapMode::SetAside;
   /// After the paper's response, continuous tests keep every triangle from passing through another
   /// during the substep (core/collision/failsafe.hpp). Off, or under response "none": the
   /// paper's pipeline alone.

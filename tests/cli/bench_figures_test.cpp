@@ -236,7 +236,7 @@ TEST_F(BenchFigures, MaxVolumeErrorIsTheWorstFrameOfTheWrittenBodies) {
     for (std::size_t b = 0; b < rest.size(); ++b)
       worst = std::max(worst, std::abs(volumes[b] / rest[b] - 1));
   }
-  EXPECT_GT(worst, 0.005) << "the balls should squash each other in these frames";
+  EXPECT_GT(worst, 0.001) << "the balls should squash each other in these frames";
   EXPECT_NEAR(reported, worst, 2e-4);
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "softbake_process.hpp"
+#include "tests/support/scoped_environment.hpp"
 
 namespace fs = std::filesystem;
 
@@ -34,20 +35,7 @@ std::size_t filesUnder(const fs::path& folder) {
   return files;
 }
 
-// One of the test hooks of importers/assimp_snapshot.hpp (the process that reads a file with
-// assimp stalls, or maps memory, before it reads), for the softbake processes one test starts.
-class TestImports {
- public:
-  TestImports(const char* variable, const char* value) : variable_(variable) {
-    ::setenv(variable, value, 1);
-  }
-  ~TestImports() { ::unsetenv(variable_); }
-  TestImports(const TestImports&) = delete;
-  TestImports& operator=(const TestImports&) = delete;
-
- private:
-  const char* variable_;
-};
+using TestImports = softbake::test::ScopedEnvironment;
 
 class ImportCliTest : public ::testing::Test {
  protected:

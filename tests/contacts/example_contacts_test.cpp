@@ -48,8 +48,8 @@ std::string describe(const test::IntersectionCount& count) {
 }
 
 /// Intersecting pairs that the scene asks to avoid: all between surfaces, and those within a
-/// surface that collides with itself. A closed body without self-collision (the default: its gas
-/// keeps it from folding) may crease into itself under a heavy load; that is counted apart.
+/// surface that collides with itself (the default). A body with self-collision turned off may
+/// crease into itself under a heavy load; that is counted apart.
 std::size_t forbiddenPairs(const test::IntersectionCount& count,
                            const CollisionGeometry& geometry) {
   std::size_t forbidden = count.betweenSurfaces;

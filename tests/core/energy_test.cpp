@@ -50,6 +50,9 @@ TEST(Energy, AnUndampedBallKeepsItsEnergy) {
   SceneSetup scene = test::ballScene(material, 3, 0.5f, {0, 0, 0}, true, false);
   scene.settings.substeps = 1000;
   scene.settings.integrator = IntegratorKind::Explicit;
+  // No contact: the breathing (up to 700 J at this stretch, with the rubber's bulk term) folds the
+  // skin into itself, which self-collision would stop.
+  scene.bodies[0].selfCollision = false;
   auto topology = std::make_shared<const SceneTopology>(buildSceneTopology(scene));
   SimulationState state = initialState(*topology);
   for (Vec3& p : state.position) p *= Scalar(1.15);  // stretched: it breathes

@@ -17,7 +17,7 @@ namespace {
 
 struct DocumentedPreset {
   std::string name, character;
-  double stiffness = 0, bendStiffness = 0, damping = 0, pressure = 0;
+  double stiffness = 0, bendStiffness = 0, damping = 0, pressure = 0, bulkModulus = 0;
 };
 
 std::string trimmed(const std::string& text) {
@@ -27,7 +27,7 @@ std::string trimmed(const std::string& text) {
 }
 
 /// The rows of the table under "## Materials":
-/// | `rubber` (default) | 1000 | 300 | 0.05 | 100 | a rubber ball: ... |
+/// | `rubber` (default) | 1000 | 300 | 0.05 | 100 | 40000 | a rubber ball: ... |
 std::vector<DocumentedPreset> readmePresets() {
   std::ifstream readme(std::filesystem::path(SOFTBAKE_SOURCE_DIR) / "README.md");
   std::vector<DocumentedPreset> presets;
@@ -38,14 +38,15 @@ std::vector<DocumentedPreset> readmePresets() {
     std::vector<std::string> cells;
     std::istringstream row(line.substr(1));
     for (std::string cell; std::getline(row, cell, '|');) cells.push_back(trimmed(cell));
-    if (cells.size() < 6) continue;
+    if (cells.size() < 7) continue;
     DocumentedPreset preset;
     preset.name = cells[0].substr(1, cells[0].find('`', 1) - 1);
     preset.stiffness = std::stod(cells[1]);
     preset.bendStiffness = std::stod(cells[2]);
     preset.damping = std::stod(cells[3]);
     preset.pressure = std::stod(cells[4]);
-    preset.character = cells[5];
+    preset.bulkModulus = std::stod(cells[5]);
+    preset.character = cells[6];
     presets.push_back(preset);
   }
   return presets;
@@ -67,6 +68,7 @@ TEST(MaterialPresets, HoldTheReadmesValuesInItsOrder) {
     EXPECT_FLOAT_EQ(float(preset.material.bendStiffness), float(doc.bendStiffness));
     EXPECT_FLOAT_EQ(float(preset.material.damping), float(doc.damping));
     EXPECT_FLOAT_EQ(float(preset.material.pressure), float(doc.pressure));
+    EXPECT_FLOAT_EQ(float(preset.material.bulkModulus), float(doc.bulkModulus));
     const std::optional<Material> found = findMaterialPreset(doc.name);
     ASSERT_TRUE(found.has_value());
     EXPECT_EQ(found->stiffness, preset.material.stiffness);
@@ -81,6 +83,7 @@ TEST(MaterialPresets, TheDefaultMaterialIsRubber) {
   EXPECT_EQ(fallback.bendStiffness, rubber.bendStiffness);
   EXPECT_EQ(fallback.damping, rubber.damping);
   EXPECT_EQ(fallback.pressure, rubber.pressure);
+  EXPECT_EQ(fallback.bulkModulus, rubber.bulkModulus);
   EXPECT_FALSE(findMaterialPreset("Rubber").has_value());
   EXPECT_FALSE(findMaterialPreset("steel").has_value());
 }

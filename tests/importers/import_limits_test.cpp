@@ -24,6 +24,7 @@
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
 #include "test_files.hpp"
+#include "tests/support/scoped_environment.hpp"
 
 namespace softbake {
 namespace {
@@ -76,19 +77,7 @@ const aiScene* greedyCatchingRead(Assimp::Importer& importer, unsigned flags) {
   return nullptr;
 }
 
-// One of the test hooks of assimp_snapshot.hpp, set for one test.
-class TestImports {
- public:
-  TestImports(const char* variable, const char* value) : variable_(variable) {
-    ::setenv(variable, value, 1);
-  }
-  ~TestImports() { ::unsetenv(variable_); }
-  TestImports(const TestImports&) = delete;
-  TestImports& operator=(const TestImports&) = delete;
-
- private:
-  const char* variable_;
-};
+using TestImports = test::ScopedEnvironment;
 
 TEST(ImportLimits, FacesAndVerticesAboveTheirCapsAreRefusedNamingTheFile) {
   ImportLimits limits;

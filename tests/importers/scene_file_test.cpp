@@ -386,7 +386,7 @@ TEST(SceneFile, CollisionKeyErrorsNameTheKeyPath) {
   EXPECT_THAT(
       sceneError(cat(R"({"settings": {"collisions": {"initial_overlap": "glue"}}, )", body, "}")),
       ::testing::HasSubstr(
-          R"(settings.collisions.initial_overlap: expected "separate" or "ignore")"));
+          R"(settings.collisions.initial_overlap: expected "set_aside", "separate" or "ignore")"));
   EXPECT_THAT(sceneError(cat(R"({"settings": {"collisions": {"failsafe": "on"}}, )", body, "}")),
               ::testing::HasSubstr("settings.collisions.failsafe"));
   EXPECT_THAT(

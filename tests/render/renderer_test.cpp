@@ -36,13 +36,15 @@ using test::ScratchDirectory;
 
 constexpr int kWidth = 160, kHeight = 120;
 
-/// One ball of radius 0.5 at (0, 1, 0) over the ground plane y = 0.
+/// One ball of radius 0.5 at (0, 1, 0) over the ground plane y = 0. It cannot touch itself, so
+/// the renderer draws it opaque (the x-ray view has its own tests, contact_view_test.cpp).
 std::shared_ptr<const SceneTopology> makeBallTopology() {
   SceneSetup setup;
   setup.name = "ball";
   BodySetup body;
   body.name = "ball";
   body.mesh = makeIcosphere(3, 0.5f, Vec3f(0, 1, 0));
+  body.selfCollision = false;
   setup.bodies.push_back(std::move(body));
   setup.planes.push_back(PlaneCollider{});
   return std::make_shared<const SceneTopology>(buildSceneTopology(setup));

@@ -57,8 +57,10 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
       if (!CGAL::do_intersect(triangles[a], triangles[b])) continue;
       (within ? result.withinSurfaces : result.betweenSurfaces) += 1;
       ++result.bySurfaces[{std::min(surfaceA, surfaceB), std::max(surfaceA, surfaceB)}];
+      result.pairs.emplace_back(Index(std::min(a, b)), Index(std::max(a, b)));
     }
   }
+  std::sort(result.pairs.begin(), result.pairs.end());
   return result;
 }
 

@@ -20,6 +20,7 @@
 #include <map>
 #include <span>
 #include <utility>
+#include <vector>
 
 #include "core/collision/geometry.hpp"
 #include "core/types.hpp"
@@ -31,6 +32,8 @@ struct IntersectionCount {
   std::size_t withinSurfaces = 0;
   /// Per pair of surfaces (lower index first; a surface with itself for the pairs within one).
   std::map<std::pair<Index, Index>, std::size_t> bySurfaces;
+  /// Every intersecting pair of triangles, lower index first, sorted.
+  std::vector<std::pair<Index, Index>> pairs;
   std::size_t total() const { return betweenSurfaces + withinSurfaces; }
 };
 
