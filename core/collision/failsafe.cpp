@@ -271,8 +271,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
   std::erase_if(impacts_, [&](const FailsafeImpact& impact) {
-    return startsInside(topology, start, impact) ||
-           (closeAtRest(topology, impact) && !crosses(geometry, start, end, impact)) ||
+    return (closeAtRest(topology, impact) && !crosses(geometry, start, end, impact)) ||
            intersectedAtStart(topology, start, impact);
   });
   return !impacts_.empty();
@@ -310,24 +309,6 @@ bool CollisionFailsafe::crosses(const CollisionGeometry& geometry, std::span<con
   };
   const double before = side(start), after = side(end);
   return (before > 0 && after < 0) || (before < 0 && after > 0);
-}
-
-bool CollisionFailsafe::startsInside(const SceneTopology& topology, std::span<const Vec3> start,
-                                     const FailsafeImpact& impact) const {
-  const CollisionGeometry& geometry = topology.collision;
-  if (impact.edge) return false;
-  const Index surface = geometry.triangleSurface[impact.face];
-  if (surface >= topology.bodies.size() || !topology.bodies[surface].closed) return false;
-  // A body's own surface may not pass through itself from inside either (a ball pressed flat).
-  const Index vertex = impact.vertex[0];
-  if (vertex < geometry.particleCount && topology.particleBody[vertex] == surface) return false;
-  // The side of the face's plane the vertex starts on: the meeting is the first time the two come
-  // within the tolerance, so the vertex stays on that side until then, and comes from behind the
-  // face (the faces wind counter-clockwise seen from outside) only from inside the body.
-  const std::array<Vec3, 3> c = geometry.corners(start, impact.face);
-  const Vec3d a = c[0].cast<double>();
-  const Vec3d p = geometry.vertex(start, impact.vertex[0]).cast<double>();
-  return (p - a).dot((c[1].cast<double>() - a).cross(c[2].cast<double>() - a)) < 0;
 }
 
 bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,

@@ -34,12 +34,6 @@
 /// push into the next fit (an engine of 115 parts held the failsafe at its last stage in every
 /// substep).
 ///
-/// A vertex–face meeting whose vertex comes from behind another closed body's face (from inside
-/// that body) is left alone: it is
-/// already a tangle, set aside or left from the start, and holding it would hold the body inside;
-/// letting it go lets the point leave. Nothing outside a closed body is ever let in by this, since
-/// a point reaches the inside only by crossing a face from its front.
-///
 /// Surfaces that intersect each other are not held apart: holding them would hold them in their
 /// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
 /// while any are left, and the detangler (core/collision/detangle.hpp) or the paper's response
@@ -128,10 +122,6 @@ class CollisionFailsafe {
   /// Whether the meeting's first primitive ends the substep on the other side of the second.
   static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
                       std::span<const Vec3> end, const FailsafeImpact& impact);
-  /// Whether a vertex–face meeting's vertex comes from inside another closed body: from behind the
-  /// face.
-  bool startsInside(const SceneTopology& topology, std::span<const Vec3> start,
-                    const FailsafeImpact& impact) const;
   void applyImpulses(const SceneTopology& topology, SimulationState& state, double dt);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
