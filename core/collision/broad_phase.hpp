@@ -7,9 +7,11 @@
 /// `BroadPhaseKind::BruteForce` is the reference the others are tested against.
 ///
 /// Eligibility (pairEligible): triangles of two different surfaces, unless both are static; two
-/// triangles of one surface only when that surface self-collides and they share no vertex.
+/// triangles of one surface only when that surface self-collides, they share no vertex and they
+/// do not lie in one patch that is flat this step (normal cones: core/collision/self_patches.hpp).
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
@@ -45,6 +47,16 @@ struct BroadPhaseInput {
       triangleVertices;                    ///< per triangle, in one vertex space for all surfaces
   std::span<const Index> triangleSurface;  ///< per triangle: its surface
   std::span<const CollisionSurface> surfaces;
+  /// Normal-cone culling (core/collision/self_patches.hpp): per triangle its patch or kNoPatch,
+  /// and per patch whether it is flat this step. Empty: no pair is culled.
+  std::span<const Index> trianglePatch;
+  std::span<const std::uint8_t> patchFlat;
+  /// Whether i and j lie in one patch that is flat this step.
+  bool inOneFlatPatch(Index i, Index j) const {
+    if (patchFlat.empty()) return false;
+    const Index p = trianglePatch[i];
+    return p == trianglePatch[j] && p < patchFlat.size() && patchFlat[p];
+  }
 };
 
 struct TrianglePair {

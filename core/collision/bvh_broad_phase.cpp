@@ -28,6 +28,11 @@ constexpr std::size_t kMaxChunks = 256;
 /// Triangles per chunk of findPairsInvolving, at least: each descends every tree it may meet.
 constexpr std::size_t kQueryGrain = 64;
 
+/// Whether `patch` is one flat this step: two subtrees within it have no pairs.
+bool flatPatch(const BroadPhaseInput& input, Index patch) {
+  return patch < input.patchFlat.size() && input.patchFlat[patch];
+}
+
 double area(const Box3& box) {
   if (box.isEmpty()) return 0;
   const Vec3d d = box.max().cast<double>() - box.min().cast<double>();
@@ -222,6 +227,29 @@ void BvhBroadPhase::build(const BroadPhaseInput& input, Tree& tree) {
   tree.parent.clear();
   tree.leafOf.resize(tree.triangleCount);
   tree.takenIn = 0;
+  // A self-colliding surface's patches, each kept whole in one subtree while the splits can:
+  // then a subtree within a flat patch is skipped whole instead of leaf by leaf.
+  tree.patchCentre.clear();
+  if (!input.trianglePatch.empty() && tree.triangleCount > 0 &&
+      input.trianglePatch[tree.firstTriangle] != ~Index(0)) {
+    Index first = ~Index(0), last = 0;
+    for (Index t = tree.firstTriangle; t < tree.firstTriangle + tree.triangleCount; ++t) {
+      first = std::min(first, input.trianglePatch[t]);
+      last = std::max(last, input.trianglePatch[t]);
+    }
+    if (last != ~Index(0)) {
+      tree.firstPatch = first;
+      tree.patchCentre.assign(last - first + 1, Vec3::Zero());
+      tree.patchSize.assign(tree.patchCentre.size(), 0);
+      for (Index t = tree.firstTriangle; t < tree.firstTriangle + tree.triangleCount; ++t) {
+        const Index p = input.trianglePatch[t] - first;
+        tree.patchCentre[p] += Vec3(input.triangleBox[t].center());
+        ++tree.patchSize[p];
+      }
+      for (std::size_t p = 0; p < tree.patchSize.size(); ++p)
+        if (tree.patchSize[p] > 0) tree.patchCentre[p] /= Scalar(tree.patchSize[p]);
+    }
+  }
   if (tree.triangleCount > 0) buildNode(input, tree, 0, tree.triangleCount, 0);
   tree.looseness = looseness(tree);
   tree.built = true;
@@ -240,30 +268,70 @@ Index BvhBroadPhase::buildNode(const BroadPhaseInput& input, Tree& tree, Index b
   }
   if (end - begin <= kLeafSize) {
     tree.nodes[node].box = box;
+    if (!input.trianglePatch.empty()) {
+      Index patch = input.trianglePatch[tree.order[begin]];
+      for (Index k = begin + 1; k < end; ++k)
+        if (input.trianglePatch[tree.order[k]] != patch) patch = ~Index(0);
+      tree.nodes[node].patch = patch;
+    }
     tree.nodes[node].start = begin;
     tree.nodes[node].count = end - begin;
     for (Index k = begin; k < end; ++k) tree.leafOf[tree.order[k] - tree.firstTriangle] = node;
     return node;
   }
   // Median split on the longest axis of the centres: halves by count, so the depth is log2(n)
-  // whatever the shape, and every level of the tree splits work evenly for the descent.
+  // whatever the shape, and every level of the tree splits work evenly for the descent. While the
+  // range spans several patches, by the patches' centres instead, moved to a patch's boundary.
+  const auto patchOf = [&](Index triangle) {
+    return tree.patchCentre.empty() ? Index(0) : input.trianglePatch[triangle] - tree.firstPatch;
+  };
+  bool onePatch = true;
+  for (Index k = begin + 1; k < end && onePatch; ++k)
+    onePatch = patchOf(tree.order[k]) == patchOf(tree.order[begin]);
+  const bool byPatch = !tree.patchCentre.empty() && !onePatch;
+  if (byPatch) {
+    centers.setEmpty();
+    for (Index k = begin; k < end; ++k) centers.extend(tree.patchCentre[patchOf(tree.order[k])]);
+  }
   int axis = 0;
   centers.sizes().maxCoeff(&axis);
   for (Index k = begin; k < end; ++k) {
-    const Scalar c = input.triangleBox[tree.order[k]].center()[axis];
-    tree.key[tree.order[k] - tree.firstTriangle] = std::isnan(c) ? Scalar(0) : c;  // a strict order
+    const Index t = tree.order[k];
+    const Scalar c =
+        byPatch ? tree.patchCentre[patchOf(t)][axis] : input.triangleBox[t].center()[axis];
+    tree.key[t - tree.firstTriangle] = std::isnan(c) ? Scalar(0) : c;  // a strict order
   }
-  const Index mid = begin + (end - begin) / 2;
+  Index mid = begin + (end - begin) / 2;
+  // By patch, ties between patches go by patch, so each patch is one run of the order.
   std::nth_element(tree.order.begin() + begin, tree.order.begin() + mid, tree.order.begin() + end,
                    [&](Index a, Index b) {
                      const Scalar ka = tree.key[a - tree.firstTriangle];
                      const Scalar kb = tree.key[b - tree.firstTriangle];
-                     return ka < kb || (ka == kb && a < b);
+                     if (ka != kb) return ka < kb;
+                     if (byPatch && patchOf(a) != patchOf(b)) return patchOf(a) < patchOf(b);
+                     return a < b;
                    });
-  buildNode(input, tree, begin, mid, node);
+  if (byPatch) {
+    // The patch at the median lies on both sides: its part on the right joins the left.
+    const Index straddling = patchOf(tree.order[mid]);
+    const auto moved = std::partition(tree.order.begin() + mid, tree.order.begin() + end,
+                                      [&](Index t) { return patchOf(t) == straddling; });
+    const Index after = Index(moved - tree.order.begin());
+    // Unless that leaves the right empty: then the patch goes right whole.
+    if (after < end) {
+      mid = after;
+    } else {
+      mid = Index(std::partition(tree.order.begin() + begin, tree.order.begin() + end,
+                                 [&](Index t) { return patchOf(t) != straddling; }) -
+                  tree.order.begin());
+    }
+  }
+  const Index left = buildNode(input, tree, begin, mid, node);
   const Index right = buildNode(input, tree, mid, end, node);
   tree.nodes[node].box = box;
   tree.nodes[node].right = right;
+  if (tree.nodes[left].patch == tree.nodes[right].patch)
+    tree.nodes[node].patch = tree.nodes[left].patch;
   return node;
 }
 
@@ -305,6 +373,7 @@ void BvhBroadPhase::visit(const BroadPhaseInput& input, const Task& task, std::v
   const Node& a = ta.nodes[task.nodeA];
   const Node& b = tb.nodes[task.nodeB];
 
+  if (task.treeA == task.treeB && a.patch == b.patch && flatPatch(input, a.patch)) return;
   if (task.treeA == task.treeB && task.nodeA == task.nodeB) {  // a subtree against itself
     if (a.leaf()) {
       for (Index i = a.start; i < a.start + a.count; ++i)

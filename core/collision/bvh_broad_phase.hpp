@@ -41,6 +41,9 @@ class BvhBroadPhase final : public BroadPhase {
     Index start = 0;  ///< leaf: first triangle in Tree::order; inner: unused
     Index count = 0;  ///< leaf: triangles (> 0); inner: 0
     Index right = 0;  ///< inner: right child (the left one is the next node)
+    /// The self-collision patch all its triangles lie in, or none (~0): a subtree within one
+    /// patch that is flat this step has no pairs within itself.
+    Index patch = ~Index(0);
     bool leaf() const { return count > 0; }
   };
 
@@ -49,8 +52,13 @@ class BvhBroadPhase final : public BroadPhase {
     bool built = false;
     double looseness = 0;  ///< at the latest build
     std::vector<Node> nodes;
-    std::vector<Index> order;   ///< triangle ids, leaf by leaf
-    std::vector<Scalar> key;    ///< scratch for the build: centroids along the split axis
+    std::vector<Index> order;  ///< triangle ids, leaf by leaf
+    std::vector<Scalar> key;   ///< scratch for the build: centroids along the split axis
+    /// Scratch for the build: per self-collision patch of the surface (numbered from its first),
+    /// the mean of its triangles' box centres.
+    std::vector<Vec3> patchCentre;
+    std::vector<Index> patchSize;  ///< scratch for the build: the patches' triangle counts
+    Index firstPatch = 0;
     std::vector<Index> parent;  ///< per node (the root's is itself)
     std::vector<Index> leafOf;  ///< per triangle of the surface: its leaf
     /// Triangles whose boxes were taken in along their leaf's path since the latest refit.

@@ -165,11 +165,12 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
                                StageClock* clock) {
   const CollisionGeometry& geometry = topology.collision;
   updateCollisionBoxes(topology, motion, boxes_, topology.settings.skin, particleBoxes_);
+  updateFlatPatches(geometry, motion.start, motion.end, patchFlat_);
   if (clock) clock->lap(Stage::Boxes);
   if (pairCache_)
-    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_), pairs_);
+    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
   else
-    broadPhase_->findPairs(geometry.broadPhaseInput(boxes_), pairs_);
+    broadPhase_->findPairs(geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
   dropIgnoredPairs(geometry, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
   findContacts(topology, motion);
@@ -181,10 +182,7 @@ void CollisionDetector::dropTangledContacts(const SceneTopology& topology,
   const CollisionGeometry& geometry = topology.collision;
   TrianglePairHits hits;
   const auto intersectedAtStart = [&](Index t, Index u) {
-    for (Index v : geometry.triangleVertices[u])
-      if (hasVertex(geometry.triangleVertices[t], v)) return false;
-    return intersectTrianglePair(geometry.corners(motion.start, t),
-                                 geometry.corners(motion.start, u), hits);
+    return geometry.trianglesCross(motion.start, t, u, hits);
   };
   std::erase_if(edgeContacts_, [&](const EdgeContact& contact) {
     return intersectedAtStart(contact.edgeTriangle, contact.triangle);
@@ -212,7 +210,7 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
   // candidates (that was a quarter of a contact-heavy step). The pairs are tested in parallel
   // chunks whose hits are joined in chunk order, and only the few particle hits are sorted, so
   // the result is the same for any thread count.
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, patchFlat_);
   const auto testsFrom = [&](Index from, Index p, Index against) {
     const Box3& target = boxes_[against];
     for (Index r = topology.triangleRowStart[p]; r < topology.triangleRowStart[p + 1]; ++r) {
@@ -275,6 +273,18 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
       testCorners(second, first, a, normalA, sidesOfB);
     }
   });
+  // Which chunk a contact falls in moves with the candidate pairs: each chunk's buffer is kept as
+  // large as the largest any chunk has needed, so resting contacts settle to no allocation even as
+  // they drift between chunks.
+  std::size_t mostHits = 0, mostEdges = 0;
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+    mostHits = std::max(mostHits, chunkHits_[chunk].size());
+    mostEdges = std::max(mostEdges, chunkEdges_[chunk].size());
+  }
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+    chunkHits_[chunk].reserve(mostHits);
+    chunkEdges_[chunk].reserve(mostEdges);
+  }
   edgeContacts_.clear();
   for (std::size_t chunk = 0; chunk < chunks; ++chunk)
     edgeContacts_.insert(edgeContacts_.end(), chunkEdges_[chunk].begin(), chunkEdges_[chunk].end());

@@ -86,6 +86,9 @@ class CollisionDetector {
   }
   /// This substep's box of every collision triangle.
   std::span<const Box3> triangleBoxes() const { return boxes_; }
+  /// Per self-collision patch, whether it was flat over this substep's motion (updateFlatPatches):
+  /// what the broad phase culled by, for stages that read its pairs.
+  std::span<const std::uint8_t> flatPatches() const { return patchFlat_; }
 
  private:
   void findContacts(const SceneTopology& topology, const SubstepMotion& motion);
@@ -96,6 +99,7 @@ class CollisionDetector {
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of
+  std::vector<std::uint8_t> patchFlat_;  ///< per self-collision patch: flat over this substep
   std::unique_ptr<BroadPhase> broadPhase_;
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;

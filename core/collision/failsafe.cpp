@@ -173,7 +173,8 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   // The detector's cached pairs hold this stage's almost always: the response moves particles
   // far less than the cache's margin, and the few triangles it moves out are found again there.
   // Its own broad phase only when the detector keeps no cache.
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_);
+  // Culled as the detector's broad phase was: its cache holds pairs by those patches.
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, detector.flatPatches());
   if (!detector.findCachedPairs(input, pairs_)) pairCache_.findPairs(*broadPhase_, input, pairs_);
   detector.dropIgnoredPairs(geometry, pairs_);
   dropSurfacePairs(geometry, tangled_, pairs_);
@@ -321,10 +322,7 @@ bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
   };
   TrianglePairHits hits;
   const auto intersect = [&](Index t, Index u) {
-    const Triangle& a = geometry.triangleVertices[t];
-    for (Index v : geometry.triangleVertices[u])
-      if (hasVertex(a, v)) return false;
-    return intersectTrianglePair(geometry.corners(start, t), geometry.corners(start, u), hits);
+    return geometry.trianglesCross(start, t, u, hits);
   };
   if (!impact.edge) {
     for (Index t : around(impact.vertex[0]))

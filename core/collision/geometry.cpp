@@ -65,6 +65,7 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
                                     topology.bodies[b].triangleCount, Index(b));
   for (const StaticMeshCollider& collider : topology.staticMeshes)
     addStaticMesh(geometry, collider);
+  geometry.selfPatches = buildSelfPatches(geometry);
   return geometry;
 }
 

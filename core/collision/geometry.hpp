@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
+#include "core/collision/self_patches.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/types.hpp"
@@ -19,6 +20,11 @@ namespace softbake {
 
 struct SceneTopology;
 struct SubstepMotion;
+
+/// Whether `v` is one of the corners of `t`.
+inline bool hasVertex(const Triangle& t, Index v) {
+  return t[0] == v || t[1] == v || t[2] == v;
+}
 
 struct CollisionGeometry {
   std::vector<CollisionSurface> surfaces;
@@ -29,6 +35,7 @@ struct CollisionGeometry {
   std::vector<bool> surfaceClosed;            ///< per surface: has an inside (edge pushes use it)
   Index particleCount = 0;                    ///< first static vertex index
   Index softTriangleCount = 0;                ///< first static triangle index
+  SelfPatches selfPatches;                    ///< the self-colliding surfaces cut into patches
 
   /// The position of collision vertex `v`: particle v of `positions`, or a static mesh vertex.
   const Vec3& vertex(std::span<const Vec3> positions, Index v) const {
@@ -39,16 +46,22 @@ struct CollisionGeometry {
     const Triangle& t = triangleVertices[triangle];
     return {vertex(positions, t[0]), vertex(positions, t[1]), vertex(positions, t[2])};
   }
-  /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle).
-  BroadPhaseInput broadPhaseInput(std::span<const Box3> triangleBox) const {
-    return {triangleBox, triangleVertices, triangleSurface, surfaces};
+  /// Whether collision triangles t and u cross at `positions` (intersectTrianglePair). Two that
+  /// share a vertex touch there by construction: that is the mesh, not a crossing.
+  bool trianglesCross(std::span<const Vec3> positions, Index t, Index u,
+                      TrianglePairHits& hits) const {
+    for (Index v : triangleVertices[u])
+      if (hasVertex(triangleVertices[t], v)) return false;
+    return intersectTrianglePair(corners(positions, t), corners(positions, u), hits);
+  }
+  /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle) and,
+  /// for normal-cone culling, which patches are flat (updateFlatPatches; empty culls nothing).
+  BroadPhaseInput broadPhaseInput(std::span<const Box3> triangleBox,
+                                  std::span<const std::uint8_t> patchFlat = {}) const {
+    return {triangleBox, triangleVertices,          triangleSurface,
+            surfaces,    selfPatches.trianglePatch, patchFlat};
   }
 };
-
-/// Whether `v` is one of the corners of `t`.
-inline bool hasVertex(const Triangle& t, Index v) {
-  return t[0] == v || t[1] == v || t[2] == v;
-}
 
 /// Removes from `pairs` the triangle pairs between the surfaces of `surfacePairs` (sorted, lower
 /// surface first; a surface with itself for pairs within one).

@@ -46,9 +46,8 @@ void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> posi
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       TrianglePairHits hits;
                       for (std::size_t k = range.begin(); k != range.end(); ++k)
-                        intersects[k] = intersectTrianglePair(
-                            geometry.corners(positions, from[k].first),
-                            geometry.corners(positions, from[k].second), hits);
+                        intersects[k] =
+                            geometry.trianglesCross(positions, from[k].first, from[k].second, hits);
                     });
   out.clear();
   for (std::size_t k = 0; k < from.size(); ++k)

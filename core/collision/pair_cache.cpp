@@ -27,6 +27,7 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
                         grown_[t] = grow(input.triangleBox[t]);
                     });
   broadPhase.findPairs(grownInput(input), cached_);
+  flatSeen_.assign(input.patchFlat.begin(), input.patchFlat.end());
   surfaceCount_ = input.surfaces.size();
   updatedSinceRebuild_ = 0;
   ++rebuilds_;
@@ -44,7 +45,19 @@ BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
 
 bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
-  if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size()) return false;
+  if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size() ||
+      flatSeen_.size() != input.patchFlat.size())
+    return false;
+  bool anyTurned = false;
+  turned_.resize(flatSeen_.size());
+  for (std::size_t p = 0; p < turned_.size(); ++p) {
+    turned_[p] = std::uint8_t(flatSeen_[p] != input.patchFlat[p]);
+    anyTurned = anyTurned || turned_[p];
+  }
+  const auto turned = [&](std::size_t t) {
+    const Index patch = input.trianglePatch[t];
+    return patch < turned_.size() && turned_[patch];
+  };
   // The triangles that left, gathered in parallel chunks and joined in chunk order: ascending.
   const std::size_t chunks = std::min(kMostChunks, (count + kBoxGrain - 1) / kBoxGrain);
   if (leftChunks_.size() < chunks) leftChunks_.resize(chunks);
@@ -52,7 +65,8 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
     std::vector<Index>& out = leftChunks_[chunk];
     out.clear();
     for (std::size_t t = count * chunk / chunks; t < count * (chunk + 1) / chunks; ++t)
-      if (!grown_[t].contains(input.triangleBox[t])) out.push_back(Index(t));
+      if (!grown_[t].contains(input.triangleBox[t]) || (anyTurned && turned(t)))
+        out.push_back(Index(t));
   });
   left_.clear();
   for (std::size_t chunk = 0; chunk < chunks; ++chunk)
@@ -77,6 +91,7 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   merged_.resize(cached_.size() + fresh_.size());
   std::merge(cached_.begin(), cached_.end(), fresh_.begin(), fresh_.end(), merged_.begin());
   cached_.swap(merged_);
+  flatSeen_.assign(input.patchFlat.begin(), input.patchFlat.end());
   ++updates_;
   return true;
 }

@@ -51,7 +51,8 @@ class PairCache {
   void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
   void rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input);
   /// The cache made valid for `input` by finding again only the pairs of the triangles that left
-  /// their grown boxes; false where it must be rebuilt whole.
+  /// their grown boxes, or whose patch turned flat or stopped being flat (pairEligible changed for
+  /// the pairs within it); false where it must be rebuilt whole.
   bool update(BroadPhase& broadPhase, const BroadPhaseInput& input);
   /// `box` grown by the margin on every side.
   Box3 grow(const Box3& box) const;
@@ -65,6 +66,8 @@ class PairCache {
   std::vector<std::vector<Index>> leftChunks_;  ///< per chunk: the triangles that left
   std::vector<Index> left_;                     ///< all of them, ascending
   std::vector<char> hasLeft_;                   ///< per triangle
+  std::vector<std::uint8_t> flatSeen_;  ///< the patches' flatness the cached pairs were found with
+  std::vector<std::uint8_t> turned_;    ///< per patch: flat then and not now, or the other way
   std::vector<TrianglePair> fresh_, merged_;
   std::size_t surfaceCount_ = 0;
   std::size_t rebuilds_ = 0, updates_ = 0;

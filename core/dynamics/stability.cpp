@@ -140,29 +140,7 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
     return v < geometry.particleCount ? velocities[v] : Vec3::Zero().eval();
   };
 
-  // Surfaces already in contact: the speed of the fastest corner of a touching triangle pair, the
-  // measure kContactReachFraction was calibrated with (their relative speed can be up to twice
-  // that).
-  ContactAccuracy choice;
-  std::vector<std::uint64_t>& touchingSurfaces = scratch.touchingSurfaces;
-  touchingSurfaces.clear();
-  for (const TrianglePair& pair : touching) {
-    double closing = 0;
-    for (const Index triangle : {pair.first, pair.second})
-      for (Index v : geometry.triangleVertices[triangle])
-        closing = std::max(closing, double(vertexVelocity(v).norm()));
-    choice.closingSpeed = std::max(choice.closingSpeed, closing + gravitySpeed);
-    const std::uint64_t a = geometry.triangleSurface[pair.first];
-    const std::uint64_t b = geometry.triangleSurface[pair.second];
-    touchingSurfaces.push_back(std::min(a, b) << 32 | std::max(a, b));
-  }
-  std::sort(touchingSurfaces.begin(), touchingSurfaces.end());
-  const auto inContact = [&](std::uint64_t a, std::uint64_t b) {
-    return std::binary_search(touchingSurfaces.begin(), touchingSurfaces.end(),
-                              std::min(a, b) << 32 | std::max(a, b));
-  };
-
-  // Surfaces not in contact yet: how fast they can close, if they can meet within the frame.
+  // Each surface's motion over the frame.
   std::vector<SurfaceMotion>& motion = scratch.motion;
   motion.clear();
   for (std::size_t s = 0; s < geometry.surfaces.size(); ++s) {
@@ -174,6 +152,33 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
     motion.back().box.min().array() -= reach;
     motion.back().box.max().array() += reach;
   }
+
+  // Surfaces already in contact: the speed of the fastest corner of a touching triangle pair, the
+  // measure kContactReachFraction was calibrated with (their relative speed can be up to twice
+  // that). Within one body, gravity and the body's travel move both triangles alike: there, the
+  // corners' speed apart from the body's mean velocity.
+  ContactAccuracy choice;
+  std::vector<std::uint64_t>& touchingSurfaces = scratch.touchingSurfaces;
+  touchingSurfaces.clear();
+  for (const TrianglePair& pair : touching) {
+    const std::uint64_t a = geometry.triangleSurface[pair.first];
+    const std::uint64_t b = geometry.triangleSurface[pair.second];
+    const bool self = a == b;
+    const Vec3d frame = self ? motion[a].meanVelocity : Vec3d::Zero();
+    double closing = 0;
+    for (const Index triangle : {pair.first, pair.second})
+      for (Index v : geometry.triangleVertices[triangle])
+        closing = std::max(closing, (vertexVelocity(v).cast<double>() - frame).norm());
+    choice.closingSpeed = std::max(choice.closingSpeed, closing + (self ? 0 : gravitySpeed));
+    touchingSurfaces.push_back(std::min(a, b) << 32 | std::max(a, b));
+  }
+  std::sort(touchingSurfaces.begin(), touchingSurfaces.end());
+  const auto inContact = [&](std::uint64_t a, std::uint64_t b) {
+    return std::binary_search(touchingSurfaces.begin(), touchingSurfaces.end(),
+                              std::min(a, b) << 32 | std::max(a, b));
+  };
+
+  // Surfaces not in contact yet: how fast they can close, if they can meet within the frame.
   for (SurfaceMotion& surface : motion) {
     if (!surface.moving) continue;
     for (const PlaneCollider& plane : topology.planes)

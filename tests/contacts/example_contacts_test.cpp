@@ -35,6 +35,9 @@ SceneFile loadExample(const std::string& name, IntegratorKind integrator) {
   SceneFile file =
       loadSceneFile(std::filesystem::path(SOFTBAKE_SOURCE_DIR) / "examples" / (name + ".json"));
   file.setup.settings.integrator = integrator;
+  // A count an example pins (flag_fold's 24) is for its own integrator; the explicit one needs
+  // its stability bound, which "auto" gives it.
+  if (integrator == IntegratorKind::Explicit) file.setup.settings.substeps = 0;
   return file;
 }
 

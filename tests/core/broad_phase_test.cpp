@@ -24,6 +24,7 @@
 #include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "tests/core/allocation_counter.hpp"
+#include "tests/support/definition_pairs.hpp"
 
 namespace softbake {
 
@@ -32,6 +33,8 @@ void PrintTo(const TrianglePair& pair, std::ostream* out) {
 }
 
 namespace {
+
+using test::definitionPairs;
 
 constexpr BroadPhaseKind kFastKinds[] = {BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash,
                                          BroadPhaseKind::Bvh};
@@ -85,18 +88,8 @@ struct Soup {
     computeBoxes(margin);
   }
 
-  BroadPhaseInput input() const { return {boxes, triangles, triangleSurface, surfaces}; }
+  BroadPhaseInput input() const { return {boxes, triangles, triangleSurface, surfaces, {}, {}}; }
 };
-
-/// The definition, written out: every i < j with overlapping boxes that pairEligible allows.
-std::vector<TrianglePair> definitionPairs(const BroadPhaseInput& input) {
-  std::vector<TrianglePair> pairs;
-  for (Index i = 0; i < input.triangleBox.size(); ++i)
-    for (Index j = i + 1; j < input.triangleBox.size(); ++j)
-      if (input.triangleBox[i].intersects(input.triangleBox[j]) && pairEligible(input, i, j))
-        pairs.push_back({i, j});
-  return pairs;
-}
 
 std::vector<TrianglePair> run(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   std::vector<TrianglePair> pairs;

@@ -1,0 +1,111 @@
+#include "core/collision/self_patches.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <utility>
+
+#include "core/collision/geometry.hpp"
+
+namespace softbake {
+
+namespace {
+constexpr std::size_t kPatchGrain = 8;   ///< patches per chunk of the cone test, at least
+constexpr Index kPatchTriangles = 128;   ///< most triangles of a patch
+constexpr double kFlatConeAngle = 80.0;  ///< degrees from the patch's mean normal
+}  // namespace
+
+SelfPatches buildSelfPatches(const CollisionGeometry& geometry) {
+  SelfPatches patches;
+  patches.trianglePatch.assign(geometry.triangleVertices.size(), kNoPatch);
+  patches.patchStart.push_back(0);
+  // Triangles across each edge, from one sorted list of (edge, triangle): linear after the sort.
+  std::vector<std::pair<std::uint64_t, Index>> edges;
+  std::vector<Index> queue;
+  for (const CollisionSurface& surface : geometry.surfaces) {
+    if (!surface.moving || !surface.selfCollision) continue;
+    const Index first = surface.firstTriangle, end = first + surface.triangleCount;
+    edges.clear();
+    for (Index t = first; t < end; ++t) {
+      const Triangle& v = geometry.triangleVertices[t];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t a = v[k], b = v[(k + 1) % 3];
+        edges.emplace_back(std::min(a, b) << 32 | std::max(a, b), t);
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    // neighbours[3·(t − first) + k]: the triangles across t's edges (kNoPatch where none, or
+    // where more than two meet: a non-manifold edge joins nothing).
+    std::vector<Index> neighbours(3 * std::size_t(surface.triangleCount), kNoPatch);
+    std::vector<std::uint8_t> filled(surface.triangleCount, 0);
+    for (std::size_t i = 0; i < edges.size();) {
+      std::size_t j = i;
+      while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+      if (j - i == 2) {
+        const Index a = edges[i].second, b = edges[i + 1].second;
+        if (a != b) {
+          neighbours[3 * (a - first) + filled[a - first]++] = b;
+          neighbours[3 * (b - first) + filled[b - first]++] = a;
+        }
+      }
+      i = j;
+    }
+    for (Index seed = first; seed < end; ++seed) {
+      if (patches.trianglePatch[seed] != kNoPatch) continue;
+      const Index patch = Index(patches.patchCount());
+      queue.assign(1, seed);
+      patches.trianglePatch[seed] = patch;
+      for (std::size_t head = 0; head < queue.size() && queue.size() < kPatchTriangles; ++head)
+        for (int k = 0; k < 3 && queue.size() < kPatchTriangles; ++k) {
+          const Index n = neighbours[3 * (queue[head] - first) + k];
+          if (n == kNoPatch || patches.trianglePatch[n] != kNoPatch) continue;
+          patches.trianglePatch[n] = patch;
+          queue.push_back(n);
+        }
+      patches.triangles.insert(patches.triangles.end(), queue.begin(), queue.end());
+      patches.patchStart.push_back(Index(patches.triangles.size()));
+    }
+  }
+  return patches;
+}
+
+void updateFlatPatches(const CollisionGeometry& geometry, std::span<const Vec3> start,
+                       std::span<const Vec3> end, std::vector<std::uint8_t>& flat) {
+  const SelfPatches& patches = geometry.selfPatches;
+  flat.resize(patches.patchCount());
+  // n within the cone of half-angle θ around a: n·a > cos θ·|n|·|a|, squared to spare the roots.
+  const double cosine = std::cos(kFlatConeAngle * std::numbers::pi / 180.0);
+  const Scalar cosineSquared = Scalar(cosine * cosine);
+  // Patches cover soft triangles only, whose corners are particles.
+  const Triangle* vertices = geometry.triangleVertices.data();
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, flat.size(), kPatchGrain),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::array<Vec3, 2 * kPatchTriangles> normals;
+        for (std::size_t p = range.begin(); p != range.end(); ++p) {
+          const Index first = patches.patchStart[p], count = patches.patchStart[p + 1] - first;
+          Vec3 axis = Vec3::Zero();
+          for (Index k = 0; k < count; ++k) {
+            const Triangle& t = vertices[patches.triangles[first + k]];
+            normals[2 * k] = (start[t[1]] - start[t[0]]).cross(start[t[2]] - start[t[0]]);
+            normals[2 * k + 1] = (end[t[1]] - end[t[0]]).cross(end[t[2]] - end[t[0]]);
+            axis += normals[2 * k] + normals[2 * k + 1];
+          }
+          const Scalar axisSquared = axis.squaredNorm();
+          // A degenerate triangle has no direction: it cannot vouch for its patch.
+          bool inCone = axisSquared > 0 && std::isfinite(axisSquared);
+          for (Index k = 0; k < 2 * count && inCone; ++k) {
+            const Scalar along = normals[k].dot(axis);
+            inCone =
+                along > 0 && along * along > cosineSquared * normals[k].squaredNorm() * axisSquared;
+          }
+          flat[p] = std::uint8_t(inCone);
+        }
+      });
+}
+
+}  // namespace softbake
