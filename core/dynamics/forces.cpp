@@ -68,6 +68,20 @@ void computeVolumes(const SceneTopology& topology, const SimulationState& state,
     forces.bodyVolume[chunks[c].body] += chunkVolume[c] / 6.0;
 }
 
+void computeTriangleVolumeGradients(const SceneTopology& topology, std::span<const Vec3> positions,
+                                    std::span<Vec3> gradient) {
+  const Triangle* triangles = topology.triangles.data();
+  const Vec3* x = positions.data();
+  Vec3* out = gradient.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.triangles.size(), kTriangleGrain),
+                    [=](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                        const Triangle& tri = triangles[t];
+                        out[t] = (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]) / 6;
+                      }
+                    });
+}
+
 void computePressureForces(const SceneTopology& topology, const SimulationState& state,
                            ForceBuffers& forces) {
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {

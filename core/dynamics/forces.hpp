@@ -4,6 +4,7 @@
 /// integrator gathers them per particle.
 
 #include <algorithm>
+#include <span>
 #include <vector>
 
 #include "core/scene/scene_topology.hpp"
@@ -40,6 +41,12 @@ inline Vec3 springForceOnA(const Spring& spring, const Vec3& d, Scalar length, c
 /// double over fixed chunks so the result does not depend on the thread count.
 void computeVolumes(const SceneTopology& topology, const SimulationState& state,
                     ForceBuffers& forces);
+
+/// Per triangle, its third of the enclosed volume's gradient: (b − a)×(c − a)/6, a third of its
+/// area-weighted normal. A particle's ∂V/∂x is the sum over its triangles, exact for a closed
+/// surface. `gradient` has one entry per triangle.
+void computeTriangleVolumeGradients(const SceneTopology& topology, std::span<const Vec3> positions,
+                                    std::span<Vec3> gradient);
 
 /// P = nRT/V + K·(1 − V/V_rest) per closed body (bodyPressure()), then the force P·A·n̂ of each
 /// triangle, a third on each corner. Needs computeVolumes() first.

@@ -183,17 +183,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
     for (std::size_t k = 0; k < volumeBodies_.size(); ++k)
       volumeCoefficient_[k] =
           double(h) * double(h) * bulkStiffness(topology.bodies[volumeBodies_[k]]);
-    // A third of each triangle's ∂V/∂x: (b − a)×(c − a)/6, as the pressure forces have it.
-    const Triangle* triangles = topology.triangles.data();
-    const Vec3* x = state.position.data();
-    Vec3* gradient = triangleGradient_.data();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.triangles.size(), 4096),
-                      [=](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                          const Triangle& tri = triangles[t];
-                          gradient[t] = (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]) / 6;
-                        }
-                      });
+    computeTriangleVolumeGradients(topology, state.position, triangleGradient_);
   }
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, (n + kLanes - 1) / kLanes, kParticleGrain / kLanes),

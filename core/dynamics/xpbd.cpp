@@ -14,7 +14,6 @@ namespace softbake {
 namespace {
 
 constexpr std::size_t kConstraintGrain = 1024;
-constexpr std::size_t kTriangleGrain = 2048;
 
 /// Greedy first-fit colouring in spring order: each spring takes the smallest colour that no
 /// spring already coloured at either of its ends has. Uses at most 2·(largest degree) − 1 colours,
@@ -98,19 +97,8 @@ void Xpbd::pushGas(const SceneTopology& topology, Scalar dt, std::span<const Vec
   if (gasBodies_.empty()) return;
   placeParticles(substepStart, state);
   computeVolumes(topology, state, forces);
-  // ∂V/∂x_i = Σ over the particle's triangles of (b − a)×(c − a)/6: a third of each area-weighted
-  // normal, exact for a closed surface.
-  const Triangle* triangles = topology.triangles.data();
-  const Vec3* x = state.position.data();
-  Vec3* triangleGradient = triangleGradient_.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topology.triangles.size(), kTriangleGrain),
-                    [=](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                        const Triangle& tri = triangles[t];
-                        triangleGradient[t] =
-                            (x[tri[1]] - x[tri[0]]).cross(x[tri[2]] - x[tri[0]]) / 6;
-                      }
-                    });
+  computeTriangleVolumeGradients(topology, state.position, triangleGradient_);
+  const Vec3* triangleGradient = triangleGradient_.data();
   Vec3* gradient = volumeGradient_.data();
   forEachParticle(state.particleCount(), [&, gradient, triangleGradient](std::size_t i) {
     Vec3 sum = Vec3::Zero();
