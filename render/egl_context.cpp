@@ -251,6 +251,7 @@ EglContext::~EglContext() {
 }
 
 void EglContext::makeCurrent() {
+  if (eglGetCurrentContext() == context_ && eglGetCurrentSurface(EGL_DRAW) == surface_) return;
   if (!eglMakeCurrent(display_, surface_, surface_, context_))
     throw Error(cat("eglMakeCurrent failed (", lastEglError(), ")"));
 }

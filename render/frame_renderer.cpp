@@ -460,6 +460,10 @@ std::vector<std::uint8_t> FrameRenderer::renderRgb(const Frame& frame) {
       throw Error(cat("renderer: frame ", frame.number, " has ", frame.positions.size(),
                       " positions, the scene has ", last.firstParticle + last.particleCount));
   }
+  // Another renderer on this thread may have made its own context current since the last frame:
+  // its GL object names are not ours (a second renderer's frame drawn between two of ours once
+  // bound names this context never made, GL_INVALID_OPERATION).
+  context_->makeCurrent();
   Gl& gl = *gl_;
   const int w = options_.width, h = options_.height;
   const Lighting light = lighting();

@@ -127,8 +127,8 @@ class FrameRenderer {
   /// Renders and writes the PNG atomically (temporary file, then rename); returns its size.
   std::size_t writePng(const Frame& frame, const std::filesystem::path& path);
 
-  /// Makes this renderer's context current again, where several renderers take turns on one
-  /// thread (a benchmark comparing them frame by frame).
+  /// Makes this renderer's context current. Every frame does it first (a no-op where it is
+  /// current already), so renderers that take turns on one thread need not.
   void makeCurrent() { context_->makeCurrent(); }
 
   const RenderScene& scene() const { return scene_; }

@@ -184,6 +184,23 @@ TEST(FrameRenderer, ContactsShowInTheContactColourWhereTheyAre) {
   EXPECT_EQ(noContacts->renderRgb(frame), renderer->renderRgb(initialFrame(world)));
 }
 
+TEST(FrameRenderer, RenderersTakingTurnsOnOneThreadEachDrawTheirOwnFrame) {
+  // Each renderer has its own context; the one made last is current. A frame of the first drawn
+  // after that once bound GL names its context never made (GL_INVALID_OPERATION, 0x502).
+  const auto world = makeBallTopology();
+  RenderOptions xrayOptions = smallOptions();
+  xrayOptions.contactsView = ContactsView::XRay;
+  MAKE_RENDERER_OR_SKIP(xray, world, xrayOptions);
+  const Frame frame = initialFrame(world);
+  const std::vector<std::uint8_t> alone = xray->renderRgb(frame);
+  auto opaque = makeRenderer(world, smallOptions(), whyNot_);
+  ASSERT_TRUE(opaque) << whyNot_;
+  const std::vector<std::uint8_t> opaqueFrame = opaque->renderRgb(frame);
+  EXPECT_EQ(xray->renderRgb(frame), alone);
+  EXPECT_EQ(opaque->renderRgb(frame), opaqueFrame);
+  EXPECT_NE(alone, opaqueFrame) << "the x-ray view draws the ball translucent";
+}
+
 TEST(FrameRenderer, WireframeDrawsEdgesOverTheBody) {
   const auto world = makeBallTopology();
   RenderOptions options = smallOptions();
