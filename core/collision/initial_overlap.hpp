@@ -52,12 +52,12 @@ struct InitialOverlaps {
 /// The triangle pairs of `topology` that intersect with its particles at `positions`.
 InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions);
 
-/// "set_aside", "separate", "ignore".
-
 /// The pairs of `from` (sorted) whose triangles intersect with the particles at `positions`, in
 /// order, into `out`.
 void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
                        std::span<const TrianglePair> from, std::vector<TrianglePair>& out);
+
+/// "set_aside", "separate", "ignore".
 std::string_view initialOverlapModeName(InitialOverlapMode mode);
 std::vector<std::string> initialOverlapModeNames();
 bool parseInitialOverlapMode(std::string_view name, InitialOverlapMode& mode);

@@ -53,8 +53,7 @@ StabilityBound computeStabilityBound(const SceneTopology& topology) {
     }
     const double bulkMode = bulk[topology.particleBody[i]];
     if (stiffness <= 0 && damping <= 0 && bulkMode <= 0) continue;
-    const double omegaSquared = bulkMode > 0 ? 2 * stiffness * topology.inverseMass[i] + bulkMode
-                                             : 2 * stiffness * topology.inverseMass[i];
+    const double omegaSquared = 2 * stiffness * topology.inverseMass[i] + bulkMode;
     const double gamma = 2 * damping * topology.inverseMass[i];
     const double h = omegaSquared > 0
                          ? (std::sqrt(gamma * gamma + 4 * omegaSquared) - gamma) / omegaSquared
