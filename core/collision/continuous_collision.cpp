@@ -175,6 +175,16 @@ std::array<double, 2> closestSegmentParameters(const Vec3d& p0, const Vec3d& p1,
   return {s, u};
 }
 
+double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d w = closestPointBarycentric(p, a, b, c);
+  return (p - (w[0] * a + w[1] * b + w[2] * c)).norm();
+}
+
+double segmentDistance(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1) {
+  const std::array<double, 2> s = closestSegmentParameters(p0, p1, q0, q1);
+  return ((p0 + s[0] * (p1 - p0)) - (q0 + s[1] * (q1 - q0))).norm();
+}
+
 std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, const PointPath& b,
                                        const PointPath& c, double tolerance) {
   const LinearVector ab = difference(b, a), ac = difference(c, a), ap = difference(p, a);

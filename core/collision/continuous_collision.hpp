@@ -55,4 +55,9 @@ Vec3d closestPointBarycentric(const Vec3d& p, const Vec3d& a, const Vec3d& b, co
 std::array<double, 2> closestSegmentParameters(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0,
                                                const Vec3d& q1);
 
+/// Distance from p to triangle abc.
+double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+/// Distance between segments p0p1 and q0q1.
+double segmentDistance(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1);
+
 }  // namespace softbake

@@ -155,10 +155,16 @@ void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
 void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
                                          std::vector<TrianglePair>& pairs) const {
   dropSurfacePairs(geometry, ignoredSurfaces_, pairs);
-  if (!setAside_.empty())
-    std::erase_if(pairs, [&](const TrianglePair& pair) {
-      return std::binary_search(setAside_.begin(), setAside_.end(), pair);
-    });
+  if (setAside_.empty()) return;
+  // Both are sorted: one walk along the two, where a search per pair cost an assembly's step
+  // more than its broad phase's filter.
+  auto aside = setAside_.begin();
+  std::size_t kept = 0;
+  for (const TrianglePair& pair : pairs) {
+    while (aside != setAside_.end() && *aside < pair) ++aside;
+    if (aside == setAside_.end() || !(*aside == pair)) pairs[kept++] = pair;
+  }
+  pairs.resize(kept);
 }
 
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,

@@ -55,8 +55,8 @@ class CollisionDetector {
   /// Under initial_overlap "ignore": two surfaces (or one with itself) that intersected at the
   /// start never collide with each other; every other pair of surfaces still does.
   void ignoreOverlaps(const InitialOverlaps& overlaps);
-  /// Removes from `pairs` those between surfaces that ignoreOverlaps() made ignore each other, and
-  /// the pairs set aside (setAside()).
+  /// Removes from `pairs` (sorted, as every broad phase returns them) those between surfaces that
+  /// ignoreOverlaps() made ignore each other, and the pairs set aside (setAside()).
   void dropIgnoredPairs(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
   /// Triangle pairs that this stage and the failsafe leave alone (initial_overlap "set_aside":
   /// those that intersected at the start, until found apart), sorted. Replaces the previous ones.
@@ -79,9 +79,10 @@ class CollisionDetector {
   /// The pairs of other boxes of the same triangles (those of a later stage of the substep) from
   /// the pair cache, which takes in the triangles whose boxes left it; false when
   /// settings.collisions.pair_cache is off.
-  bool findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+  bool findCachedPairs(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
+                       std::span<const std::uint8_t> involving = {}) {
     if (!pairCache_) return false;
-    pairCache_->findPairs(*broadPhase_, input, pairs);
+    pairCache_->findPairs(*broadPhase_, input, pairs, involving);
     return true;
   }
   /// This substep's box of every collision triangle.

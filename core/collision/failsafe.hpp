@@ -14,8 +14,10 @@
 ///
 /// 1. Impulses, in passes: each meeting gets an inelastic, mass-weighted correction along its
 ///    normal that leaves the two primitives `separation` apart at the end of the substep (a
-///    displacement, and the velocity change that makes it), applied one after the other in a
-///    fixed order. It conserves momentum; static triangles and pinned particles do not move.
+///    displacement), and takes from their velocities what approach they had along it (§7.1),
+///    applied one after the other in a fixed order. It conserves momentum; static triangles and
+///    pinned particles do not move. A later pass measures again only the pairs of triangles the
+///    pass before it moved.
 ///    An open surface (a sheet, a flag) has no inside to keep anything out of, so it gets a
 ///    two-sided skin instead: its material's thickness. Primitives of a sheet meet anything that
 ///    comes within its thickness, and are left that far apart.
@@ -29,10 +31,13 @@
 ///
 /// A meeting of two primitives that were closer than the separation in the scene's initial state
 /// (a mesh finer than the skin, a sheet thinner than its thickness, parts of an assembly fitted
-/// tighter than the skin) is left alone unless one passes through the other: the scene was made
-/// so, and holding them apart would push the bodies away from their shapes and fits, and each
-/// push into the next fit (an engine of 115 parts held the failsafe at its last stage in every
-/// substep).
+/// tighter than the skin) is left alone unless one passes more than the separation through the
+/// other: the scene was made so, and holding them apart would push the bodies away from their
+/// shapes and fits, and each push into the next fit (an engine of 115 parts held the failsafe at
+/// its last stage in every substep). Less than that is rounding and the fit's own give: faces
+/// fitted onto each other swap sides by it in every substep. So is a meeting already within its
+/// tolerance where the substep starts that ends it no closer on the same side: nothing crossed,
+/// and no stage here can leave it further apart than the start.
 ///
 /// Surfaces that intersect each other are not held apart: holding them would hold them in their
 /// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
@@ -119,10 +124,16 @@ class CollisionFailsafe {
   /// state: a mesh finer than the skin, a part thinner than it, parts of an assembly fitted tighter
   /// than it were made that close.
   bool closeAtRest(const SceneTopology& topology, const FailsafeImpact& impact) const;
-  /// Whether the meeting's first primitive ends the substep on the other side of the second.
+  /// Whether the meeting's first primitive ends the substep more than `tolerance` on the other
+  /// side of the second.
   static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
-                      std::span<const Vec3> end, const FailsafeImpact& impact);
-  void applyImpulses(const SceneTopology& topology, SimulationState& state, double dt);
+                      std::span<const Vec3> end, const FailsafeImpact& impact, double tolerance);
+  /// Whether the meeting's primitives were already within its tolerance where the substep starts
+  /// and end it no closer, on the same side: nothing crossed, and no stage here could leave them
+  /// further apart than the start, where a zone that stays puts them.
+  static bool notClosing(const CollisionGeometry& geometry, std::span<const Vec3> start,
+                         std::span<const Vec3> end, const FailsafeImpact& impact);
+  void applyImpulses(const SceneTopology& topology, SimulationState& state);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
   /// in zones.
@@ -148,10 +159,11 @@ class CollisionFailsafe {
   std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
   std::vector<std::vector<FailsafeImpact>> chunkImpacts_;
   std::vector<FailsafeImpact> impacts_;
-  std::vector<std::uint8_t> moved_;    ///< per particle: moved by this failsafe's latest pass
-  std::vector<std::uint8_t> onPlane_;  ///< per particle: kept above a plane this substep
-  std::vector<Index> zoneParent_;      ///< union–find over particles; zoneParent_[v] == v: a root
-  std::vector<Index> zoneMembers_;     ///< scratch: particles of zones, grouped by root
+  std::vector<std::uint8_t> moved_;          ///< per particle: moved by this failsafe's latest pass
+  std::vector<std::uint8_t> triangleMoved_;  ///< per collision triangle: a corner in moved_
+  std::vector<std::uint8_t> onPlane_;        ///< per particle: kept above a plane this substep
+  std::vector<Index> zoneParent_;   ///< union–find over particles; zoneParent_[v] == v: a root
+  std::vector<Index> zoneMembers_;  ///< scratch: particles of zones, grouped by root
   std::vector<std::uint8_t> inZone_;
   std::vector<std::uint8_t>
       zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle

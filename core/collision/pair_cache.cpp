@@ -2,8 +2,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <functional>
 
 namespace softbake {
 
@@ -15,22 +17,47 @@ constexpr std::size_t kMostChunks = 64;     ///< chunks of the filter and the le
 
 void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
-  if (margin_ < 0) {
+  const bool first = margin_ < 0;
+  if (first) {
     double size = 0;
     for (const Box3& box : input.triangleBox) size += double(box.sizes().maxCoeff());
     margin_ = count ? Scalar(marginFraction_ * size / double(count)) : Scalar(0);
   }
-  grown_.resize(count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kBoxGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t t = range.begin(); t != range.end(); ++t)
-                        grown_[t] = grow(input.triangleBox[t]);
-                    });
-  broadPhase.findPairs(grownInput(input), cached_);
+  const auto growAll = [&] {
+    grown_.resize(count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kBoxGrain),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t t = range.begin(); t != range.end(); ++t)
+                          grown_[t] = grow(input.triangleBox[t]);
+                      });
+    broadPhase.findPairs(grownInput(input), cached_);
+  };
+  growAll();
+  // A margin from the mean box is too wide where long slivers crowd (the cylinders of a CAD
+  // assembly): an engine of 110k faces cached 30 times its 1.5M exact pairs, and every stage of
+  // every substep filters them all. So the first rebuild narrows it until the cache holds at
+  // most kMostCachedPerPair times the exact pairs; the pairs stay exact at any margin.
+  while (first && margin_ > 0 &&
+         cached_.size() > kMostCachedPerPair * std::max<std::size_t>(exactCount(input), 1024)) {
+    margin_ /= 2;
+    growAll();
+  }
   flatSeen_.assign(input.patchFlat.begin(), input.patchFlat.end());
   surfaceCount_ = input.surfaces.size();
   updatedSinceRebuild_ = 0;
   ++rebuilds_;
+}
+
+std::size_t PairCache::exactCount(const BroadPhaseInput& input) const {
+  const Box3* box = input.triangleBox.data();
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, cached_.size(), kFilterGrain), std::size_t(0),
+      [&](const tbb::blocked_range<std::size_t>& range, std::size_t kept) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+          kept += std::size_t(overlaps(box[cached_[i].first], box[cached_[i].second]));
+        return kept;
+      },
+      std::plus<>());
 }
 
 Box3 PairCache::grow(const Box3& box) const {
@@ -97,12 +124,14 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
 }
 
 void PairCache::findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
-                          std::vector<TrianglePair>& pairs) {
+                          std::vector<TrianglePair>& pairs,
+                          std::span<const std::uint8_t> involving) {
   if (!update(broadPhase, input)) rebuild(broadPhase, input);
-  filter(input, pairs);
+  filter(input, pairs, involving);
 }
 
-void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs) {
+void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
+                       std::span<const std::uint8_t> involving) {
   // Filtered in parallel chunks, concatenated in chunk order: the cached order, sorted, is kept.
   // Without branches: a quarter of the cached pairs overlap, in no pattern a branch predictor
   // learns, so each pair is written and kept or overwritten by the next.
@@ -116,10 +145,20 @@ void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& 
     const std::size_t end = cached_.size() * (chunk + 1) / chunks;
     out.resize(end - begin);
     std::size_t kept = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      const TrianglePair pair = cached_[i];
-      out[kept] = pair;
-      kept += unsigned(overlaps(box[pair.first], box[pair.second]));
+    if (involving.empty()) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const TrianglePair pair = cached_[i];
+        out[kept] = pair;
+        kept += unsigned(overlaps(box[pair.first], box[pair.second]));
+      }
+    } else {
+      // Few triangles are flagged: their flags, a byte each, are read first and stay in cache.
+      for (std::size_t i = begin; i < end; ++i) {
+        const TrianglePair pair = cached_[i];
+        if (!(involving[pair.first] | involving[pair.second])) continue;
+        out[kept] = pair;
+        kept += unsigned(overlaps(box[pair.first], box[pair.second]));
+      }
     }
     out.resize(kept);
   });

@@ -19,6 +19,8 @@
 /// Once the triangles found again alone add up to kRebuildShare of them all, or the broad phase
 /// cannot answer for a few, the cache is rebuilt whole.
 
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
@@ -34,10 +36,14 @@ class PairCache {
   /// The exact overlapping eligible pairs of `input`, sorted, using `broadPhase` only when some
   /// box has left its grown box (or on the first call, or when the surfaces changed). Any boxes
   /// of the same triangles will do: a later stage of the substep (the failsafe) shares the cache.
+  /// With `involving` (a flag per triangle), only the pairs with a flagged triangle: a later pass
+  /// of the failsafe measures again only what its previous pass moved.
   void findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
-                 std::vector<TrianglePair>& pairs);
+                 std::vector<TrianglePair>& pairs, std::span<const std::uint8_t> involving = {});
 
   std::size_t rebuilds() const { return rebuilds_; }
+  /// Pairs the cache holds: the overlapping pairs of the grown boxes.
+  std::size_t cachedPairs() const { return cached_.size(); }
   /// Steps on which some triangles left their grown boxes and only their pairs were found again.
   std::size_t updates() const { return updates_; }
 
@@ -46,10 +52,16 @@ class PairCache {
   /// one by one since the latest rebuild add up to this fraction of them all, the cache is rebuilt
   /// instead. Measured on figure 7 and balls1m (bench/results/integrators.md).
   static constexpr double kRebuildShare = 0.25;
+  /// The first rebuild halves the margin until the cache holds at most this many times the exact
+  /// pairs. Figure 7 and the ball piles hold about 4 times at the default margin.
+  static constexpr std::size_t kMostCachedPerPair = 8;
 
  private:
-  void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs);
+  void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
+              std::span<const std::uint8_t> involving);
   void rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input);
+  /// How many cached pairs overlap in `input`: what filter() would keep.
+  std::size_t exactCount(const BroadPhaseInput& input) const;
   /// The cache made valid for `input` by finding again only the pairs of the triangles that left
   /// their grown boxes, or whose patch turned flat or stopped being flat (pairEligible changed for
   /// the pairs within it); false where it must be rebuilt whole.

@@ -165,6 +165,75 @@ TEST(Failsafe, ASheetKeepsWhatNearsItAtItsThickness) {
   EXPECT_LT(nearest, 0.008);  // several meetings on one vertex may each push it: within 2x
 }
 
+TEST(Failsafe, AnImpulseStopsTheApproachAndAddsNoBounce) {
+  // The ball's lowest vertex comes within the sheet's thickness at 2.2 m/s. Its impulses leave it
+  // the thickness away and take its approach along the normal, no more: the vertex and the sheet
+  // under it end with next to no speed towards or away from each other. (Velocities set to the
+  // push over the substep left it approaching at 1.4 m/s here, and kicked apart what was pushed
+  // further than it had come.)
+  SceneSetup setup = noGravity();
+  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
+  flat.material.thickness = 0.004f;
+  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
+  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
+  const FailsafeStats stats = step.apply();
+  ASSERT_GT(stats.impacts, 0u);
+  EXPECT_EQ(stats.frozen, 0u);
+  const Body& sheetBody = step.scene.topology.bodies[0];
+  const Body& ballBody = step.scene.topology.bodies[1];
+  const std::vector<Vec3>& x = step.scene.state.position;
+  const std::vector<Vec3>& v = step.scene.state.velocity;
+  Index lowest = ballBody.firstParticle;
+  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
+    if (x[p].y() < x[lowest].y()) lowest = p;
+  // The ball comes down onto a corner of the sheet's grid: that sheet particle is what it meets.
+  Index under = sheetBody.firstParticle;
+  const auto across = [&](Index p) {
+    return std::hypot(x[p].x() - x[lowest].x(), x[p].z() - x[lowest].z());
+  };
+  for (Index p = sheetBody.firstParticle; p < sheetBody.firstParticle + sheetBody.particleCount;
+       ++p)
+    if (across(p) < across(under)) under = p;
+  ASSERT_LT(across(under), 0.01f);
+  const double approach = 0.009 / kDt;
+  const double relative = double(v[lowest].y()) - double(v[under].y());
+  EXPECT_GT(relative, -0.2 * approach) << "still approaching";
+  // Not exactly zero: the ball's edges from that vertex meet the sheet's too, with the rest of the
+  // ball still coming down behind them, and their impulses share its momentum.
+  EXPECT_LT(relative, 0.1 * approach) << "bounced";
+}
+
+TEST(Failsafe, AMeetingAtTheStartThatDoesNotCloseNeitherHoldsNorFreezesTheSubstep) {
+  // The ball starts the substep 0.5 mm above a sheet 4 mm thick (nearer than its thickness, and
+  // not so where the scene started) and moves away from it by a tenth of a millimetre. Nothing
+  // crosses and nothing closes in: no
+  // stage can leave them further apart than where the substep started, so nothing is a meeting.
+  // Counted as meetings, zones that stay where they started held them for every pass, and then
+  // the last resort froze the whole substep.
+  SceneSetup setup = noGravity();
+  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
+  flat.material.thickness = 0.004f;
+  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
+  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, 0.0001f, 0)},
+               {.impulses = 0, .translatingZones = 0, .zones = 8});
+  const Body& ballBody = step.scene.topology.bodies[1];
+  Scalar lowest = 1e9f;
+  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
+    lowest = std::min(lowest, step.scene.substepStart[p].y());
+  const Scalar down = lowest - Scalar(0.0005);
+  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p) {
+    step.scene.substepStart[p].y() -= down;
+    step.scene.state.position[p].y() -= down;
+  }
+  const std::vector<Vec3> moved = step.scene.state.position;
+  const FailsafeStats stats = step.apply();
+  EXPECT_EQ(stats.impacts, 0u);
+  EXPECT_EQ(stats.frozen, 0u);
+  EXPECT_EQ(stats.passes, 1u);
+  EXPECT_EQ(
+      0, std::memcmp(moved.data(), step.scene.state.position.data(), moved.size() * sizeof(Vec3)));
+}
+
 TEST(Failsafe, AStackPushedIntoTheGroundStaysAboveIt) {
   SceneSetup setup = noGravity();
   setup.planes.push_back(PlaneCollider{});
