@@ -89,26 +89,18 @@ void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scr
   pairs.resize(radixSortUnique(pairs.data(), scratch.data(), pairs.size()));
 }
 
-void PairBuffers::reset(std::size_t chunks) {
-  // Never shrinks: the buffers of the chunks unused this step keep their capacity for the next.
-  if (buffers_.size() < chunks) buffers_.resize(chunks);
-  for (std::vector<TrianglePair>& buffer : buffers_) buffer.clear();
-}
-
 void PairBuffers::mergeInto(std::vector<TrianglePair>& pairs) {
+  const std::size_t buffers = buffers_.chunks();
   std::size_t total = 0;
-  for (const std::vector<TrianglePair>& buffer : buffers_) total += buffer.size();
+  for (std::size_t b = 0; b < buffers; ++b) total += buffers_[b].size();
   if (total < kBucketedSortMin) {
-    pairs.clear();
-    for (const std::vector<TrianglePair>& buffer : buffers_)
-      pairs.insert(pairs.end(), buffer.begin(), buffer.end());
+    buffers_.join(pairs);
     sortUnique(pairs, scratch_);
     return;
   }
   // Many pairs (a rebuild at a million faces): spread into buckets by the high bits of `first`,
   // so each bucket's pairs all precede the next's, and sort the buckets in parallel. The result
   // is the one sorted list, whatever the thread count.
-  const std::size_t buffers = buffers_.size();
   const Index highest = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, buffers), Index(0),
       [&](const tbb::blocked_range<std::size_t>& range, Index most) {

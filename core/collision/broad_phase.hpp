@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
@@ -151,20 +152,18 @@ struct CachedSurface {
 /// faster than a comparison sort. PairBuffers::mergeInto() sorts millions in parallel buckets.
 void sortUnique(std::vector<TrianglePair>& pairs, std::vector<TrianglePair>& scratch);
 
-/// Pairs found in parallel, one buffer per chunk of work: no two tasks share a buffer, so no lock
-/// is taken, and the result does not depend on which thread ran which chunk. Buffers keep their
-/// capacity from step to step.
+/// Pairs found in parallel, one buffer per chunk of work (ChunkBuffers), merged sorted.
 class PairBuffers {
  public:
   /// `chunks` empty buffers.
-  void reset(std::size_t chunks);
+  void reset(std::size_t chunks) { buffers_.reset(chunks); }
   std::vector<TrianglePair>& operator[](std::size_t chunk) { return buffers_[chunk]; }
   /// Replaces `pairs` with every buffer's pairs, sorted and unique. Many pairs (a rebuild at a
   /// million faces) are sorted in parallel, in buckets by the high bits of `first`.
   void mergeInto(std::vector<TrianglePair>& pairs);
 
  private:
-  std::vector<std::vector<TrianglePair>> buffers_;
+  ChunkBuffers<TrianglePair> buffers_;
   std::vector<TrianglePair> scratch_;  ///< the radix sort's other half
   /// The bucketed sort of many pairs: where each buffer's part of each bucket goes, where each
   /// bucket ends, how many of its pairs are unique, and where those go.

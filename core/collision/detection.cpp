@@ -232,13 +232,11 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
   };
   const std::size_t chunks = std::min(kPairChunks, pairs_.size());
   const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
-  if (chunkHits_.size() < chunks) chunkHits_.resize(chunks);
-  if (chunkEdges_.size() < chunks) chunkEdges_.resize(chunks);
+  chunkHits_.reset(chunks);
+  chunkEdges_.reset(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<ParticleContact>& hits = chunkHits_[chunk];
     std::vector<EdgeContact>& edges = chunkEdges_[chunk];
-    hits.clear();
-    edges.clear();
     ParticleContact contact;
     // The corners of `from` against `against`, whose corners at the end are `struckNow`.
     const auto testCorners = [&](Index from, Index against, const TriangleCorners& struckNow,
@@ -279,25 +277,11 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
       testCorners(second, first, a, normalA, sidesOfB);
     }
   });
-  // Which chunk a contact falls in moves with the candidate pairs: each chunk's buffer is kept as
-  // large as the largest any chunk has needed, so resting contacts settle to no allocation even as
-  // they drift between chunks.
-  std::size_t mostHits = 0, mostEdges = 0;
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-    mostHits = std::max(mostHits, chunkHits_[chunk].size());
-    mostEdges = std::max(mostEdges, chunkEdges_[chunk].size());
-  }
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-    chunkHits_[chunk].reserve(mostHits);
-    chunkEdges_[chunk].reserve(mostEdges);
-  }
-  edgeContacts_.clear();
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
-    edgeContacts_.insert(edgeContacts_.end(), chunkEdges_[chunk].begin(), chunkEdges_[chunk].end());
-  particleContacts_.clear();
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
-    particleContacts_.insert(particleContacts_.end(), chunkHits_[chunk].begin(),
-                             chunkHits_[chunk].end());
+  // Resting contacts drift between chunks of pairs: see ChunkBuffers::reserveLargest().
+  chunkHits_.reserveLargest();
+  chunkEdges_.reserveLargest();
+  chunkEdges_.join(edgeContacts_);
+  chunkHits_.join(particleContacts_);
   const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
     return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
   };

@@ -19,6 +19,7 @@
 #include "core/collision/line_triangle.hpp"
 #include "core/collision/pair_cache.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
+#include "core/parallel.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/stage_timer.hpp"
 
@@ -106,8 +107,8 @@ class CollisionDetector {
   std::vector<TrianglePair> pairs_;
   std::vector<std::pair<Index, Index>> ignoredSurfaces_;  ///< surface pairs that overlapped, sorted
   std::vector<TrianglePair> setAside_;                    ///< triangle pairs left alone, sorted
-  std::vector<std::vector<ParticleContact>> chunkHits_;   ///< particle hits, per chunk of pairs
-  std::vector<std::vector<EdgeContact>> chunkEdges_;      ///< edge hits, per chunk of pairs
+  ChunkBuffers<ParticleContact> chunkHits_;               ///< particle hits, per chunk of pairs
+  ChunkBuffers<EdgeContact> chunkEdges_;                  ///< edge hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;
   std::vector<ParticleContact> particleContacts_;
 };

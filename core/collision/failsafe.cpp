@@ -208,10 +208,9 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   const auto pathBox = [&](Index v) -> const Box3& { return pathBoxes_[v]; };
   const std::size_t chunks = std::min(kChunks, pairs_.size());
   const std::size_t perChunk = chunks ? (pairs_.size() + chunks - 1) / chunks : 0;
-  if (chunkImpacts_.size() < chunks) chunkImpacts_.resize(chunks);
+  chunkImpacts_.reset(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<FailsafeImpact>& found = chunkImpacts_[chunk];
-    found.clear();
     const std::size_t stop = std::min(pairs_.size(), (chunk + 1) * perChunk);
     for (std::size_t i = chunk * perChunk; i < stop; ++i) {
       const Index first = pairs_[i].first, second = pairs_[i].second;
@@ -275,9 +274,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
       }
     }
   });
-  impacts_.clear();
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
-    impacts_.insert(impacts_.end(), chunkImpacts_[chunk].begin(), chunkImpacts_[chunk].end());
+  chunkImpacts_.join(impacts_);
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
   std::erase_if(impacts_, [&](const FailsafeImpact& impact) {

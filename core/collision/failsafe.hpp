@@ -61,6 +61,7 @@
 #include "core/collision/continuous_collision.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/pair_cache.hpp"
+#include "core/parallel.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
@@ -157,7 +158,7 @@ class CollisionFailsafe {
   /// of surfaces (the triangles around it all pair with the same ones).
   std::vector<std::uint8_t> owns_;
   std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
-  std::vector<std::vector<FailsafeImpact>> chunkImpacts_;
+  ChunkBuffers<FailsafeImpact> chunkImpacts_;
   std::vector<FailsafeImpact> impacts_;
   std::vector<std::uint8_t> moved_;          ///< per particle: moved by this failsafe's latest pass
   std::vector<std::uint8_t> triangleMoved_;  ///< per collision triangle: a corner in moved_

@@ -7,13 +7,13 @@
 
 #include "core/mesh/mesh_topology.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/parallel.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
 namespace softbake {
 
 namespace {
-constexpr std::size_t kTriangleGrain = 4096;
 
 Box3 inflated(Box3 box, Scalar by) {
   box.min().array() -= by;

@@ -87,17 +87,14 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   };
   // The triangles that left, gathered in parallel chunks and joined in chunk order: ascending.
   const std::size_t chunks = std::min(kMostChunks, (count + kBoxGrain - 1) / kBoxGrain);
-  if (leftChunks_.size() < chunks) leftChunks_.resize(chunks);
+  leftChunks_.reset(chunks);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
     std::vector<Index>& out = leftChunks_[chunk];
-    out.clear();
     for (std::size_t t = count * chunk / chunks; t < count * (chunk + 1) / chunks; ++t)
       if (!grown_[t].contains(input.triangleBox[t]) || (anyTurned && turned(t)))
         out.push_back(Index(t));
   });
-  left_.clear();
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
-    left_.insert(left_.end(), leftChunks_[chunk].begin(), leftChunks_[chunk].end());
+  leftChunks_.join(left_);
   if (left_.empty()) return true;
   // Triangles found again one by one cost more than in a rebuild, which also recentres every
   // grown box: once those found since the latest rebuild add up to kRebuildShare of all, rebuild.
@@ -162,9 +159,7 @@ void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& 
     }
     out.resize(kept);
   });
-  pairs.clear();
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk)
-    pairs.insert(pairs.end(), buffers_[chunk].begin(), buffers_[chunk].end());
+  buffers_.join(pairs);
 }
 
 }  // namespace softbake

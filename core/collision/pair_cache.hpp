@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/collision/broad_phase.hpp"
+#include "core/parallel.hpp"
 
 namespace softbake {
 
@@ -74,10 +75,10 @@ class PairCache {
   Scalar margin_ = -1;  ///< scene units; negative until the first rebuild
   std::vector<Box3> grown_;
   std::vector<TrianglePair> cached_;
-  broad_phase_detail::PairBuffers buffers_;     ///< per filter chunk
-  std::vector<std::vector<Index>> leftChunks_;  ///< per chunk: the triangles that left
-  std::vector<Index> left_;                     ///< all of them, ascending
-  std::vector<char> hasLeft_;                   ///< per triangle
+  ChunkBuffers<TrianglePair> buffers_;  ///< per filter chunk
+  ChunkBuffers<Index> leftChunks_;      ///< per chunk: the triangles that left
+  std::vector<Index> left_;             ///< all of them, ascending
+  std::vector<char> hasLeft_;           ///< per triangle
   std::vector<std::uint8_t> flatSeen_;  ///< the patches' flatness the cached pairs were found with
   std::vector<std::uint8_t> turned_;    ///< per patch: flat then and not now, or the other way
   std::vector<TrianglePair> fresh_, merged_;

@@ -6,10 +6,11 @@
 #include <algorithm>
 #include <functional>
 
+#include "core/parallel.hpp"
+
 namespace softbake {
 
 namespace {
-constexpr std::size_t kParticleGrain = 2048;
 
 /// Returns true when the particle touches the plane (and, with `move`, was moved).
 bool respondToPlane(const PlaneCollider& plane, Scalar skin, const Vec3& start, Vec3& x, Vec3& v,

@@ -6,13 +6,10 @@
 
 #include <cstddef>
 
+#include "core/parallel.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
-
-/// Particles per task: a 5 000-particle scene still splits over two threads, and a task is long
-/// enough that TBB's scheduling does not show.
-inline constexpr std::size_t kParticleGrain = 2048;
 
 /// Runs body(i) for every particle i < count, in parallel. Each call must write only particle
 /// i's own entries, so the result does not depend on the thread count.

@@ -5,12 +5,13 @@
 
 #include <algorithm>
 
+#include "core/parallel.hpp"
+
 namespace softbake {
 
 namespace {
 // Grain sizes keep a task at a few microseconds of work: TBB's scheduling cost is ~1 µs.
 constexpr std::size_t kSpringGrain = 4096;
-constexpr std::size_t kTriangleGrain = 4096;
 }  // namespace
 
 ForceBuffers::ForceBuffers(const SceneTopology& topology)

@@ -7,12 +7,9 @@
 
 #include "core/enum_names.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/parallel.hpp"
 
 namespace softbake {
-
-namespace {
-constexpr std::size_t kParticleGrain = 2048;
-}  // namespace
 
 bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
                SimulationState& state, std::span<Vec3> substepStart) {
