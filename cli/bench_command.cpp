@@ -91,6 +91,8 @@ struct StepRecord {
   std::vector<int> frames;     ///< the frame each step computes
   double framesSimulated = 0;  ///< whole frames, plus the finished part of a last partial one
   std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
+  std::uint64_t failsafePasses = 0;    ///< the failsafe's detection passes, all steps
+  std::uint64_t frozenSubsteps = 0;    ///< substeps the failsafe ended at their start
   /// The largest |V/V_rest − 1| of any closed body at the end of any frame: how round the bodies
   /// stayed, the measure peers are compared at.
   double maxVolumeError = 0;
@@ -139,6 +141,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
     int substep = 0;
     for (; substep < substeps && !(stepLimit && record.times.size() == *stepLimit); ++substep) {
       const Clock::time_point start = Clock::now();
+      const FailsafeStats before = simulator.lastFrameStats().failsafe;
       simulator.step(frameNumber);
       record.simulationSeconds += secondsSince(start);
       record.times.push_back(simulator.lastStepTimes());
@@ -147,6 +150,9 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       record.frames.push_back(frameNumber);
       if (const auto solve = simulator.lastSolve())
         record.solverIterations += solve->stepIterations;
+      const FailsafeStats& after = simulator.lastFrameStats().failsafe;
+      record.failsafePasses += after.passes - before.passes;
+      record.frozenSubsteps += after.frozen - before.frozen;
     }
     record.framesSimulated += double(substep) / substeps;
     if (substep < substeps) break;  // the step limit ended the run inside this frame
@@ -220,6 +226,9 @@ double printContactsAndExports(const StepRecord& record, const std::vector<Expor
   const double contactsPerStep = contactSum / double(steps);
   std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
               contactsPerStep, contactMax, pairSum / double(steps));
+  std::printf("  failsafe passes per step: mean %.1f; substeps it ended at their start: %llu\n",
+              double(record.failsafePasses) / double(steps),
+              static_cast<unsigned long long>(record.frozenSubsteps));
   for (const ExportTiming& e : exports) {
     const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
     std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
@@ -313,14 +322,17 @@ int bench(const BenchOptions& options) {
         "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f "
-        "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu\n",
+        "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu "
+        "failsafe_passes_per_step=%.1f frozen_substeps=%llu\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
         double(record.solverIterations) / double(steps), record.maxVolumeError,
-        simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size());
+        simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size(),
+        double(record.failsafePasses) / double(steps),
+        static_cast<unsigned long long>(record.frozenSubsteps));
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record);
   }

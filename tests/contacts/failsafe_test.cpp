@@ -100,6 +100,15 @@ SceneSetup noGravity() {
   return setup;
 }
 
+/// A sheet 4 mm thick, and a ball whose lowest vertex is 1 cm above it.
+SceneSetup ballOverThickSheet() {
+  SceneSetup setup = noGravity();
+  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
+  flat.material.thickness = 0.004f;
+  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
+  return setup;
+}
+
 TEST(Failsafe, BallsThrownDeepIntoEachOtherEndApartWithTheirMomentum) {
   SceneSetup setup = noGravity();
   setup.bodies = {ball("left", Vec3f(-0.35f, 0, 0)),
@@ -142,13 +151,9 @@ TEST(Failsafe, ABallCannotPassThroughASheetWithinOneSubstep) {
 }
 
 TEST(Failsafe, ASheetKeepsWhatNearsItAtItsThickness) {
-  SceneSetup setup = noGravity();
-  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
-  flat.material.thickness = 0.004f;
   // The ball's lowest vertex from 1 cm above the sheet to 1 mm above it: no crossing, but inside
   // the sheet's thickness.
-  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
-  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
+  Substep step(ballOverThickSheet(), {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
   const FailsafeStats stats = step.apply();
   EXPECT_GT(stats.impacts, 0u);
   // Every ball vertex against every sheet triangle, by the tests' own distance.
@@ -171,11 +176,7 @@ TEST(Failsafe, AnImpulseStopsTheApproachAndAddsNoBounce) {
   // under it end with next to no speed towards or away from each other. (Velocities set to the
   // push over the substep left it approaching at 1.4 m/s here, and kicked apart what was pushed
   // further than it had come.)
-  SceneSetup setup = noGravity();
-  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
-  flat.material.thickness = 0.004f;
-  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
-  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
+  Substep step(ballOverThickSheet(), {Vec3(0, 0, 0), Vec3(0, -0.009f, 0)});
   const FailsafeStats stats = step.apply();
   ASSERT_GT(stats.impacts, 0u);
   EXPECT_EQ(stats.frozen, 0u);
@@ -210,11 +211,7 @@ TEST(Failsafe, AMeetingAtTheStartThatDoesNotCloseNeitherHoldsNorFreezesTheSubste
   // stage can leave them further apart than where the substep started, so nothing is a meeting.
   // Counted as meetings, zones that stay where they started held them for every pass, and then
   // the last resort froze the whole substep.
-  SceneSetup setup = noGravity();
-  BodySetup flat = sheet(Vec3f(0, 0, 0), 1.2f, 12);
-  flat.material.thickness = 0.004f;
-  setup.bodies = {flat, ball("ball", Vec3f(0, 0.31f, 0))};
-  Substep step(setup, {Vec3(0, 0, 0), Vec3(0, 0.0001f, 0)},
+  Substep step(ballOverThickSheet(), {Vec3(0, 0, 0), Vec3(0, 0.0001f, 0)},
                {.impulses = 0, .translatingZones = 0, .zones = 8});
   const Body& ballBody = step.scene.topology.bodies[1];
   Scalar lowest = 1e9f;
