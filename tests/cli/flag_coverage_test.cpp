@@ -1,7 +1,7 @@
-// Every flag of every command's --help is documented in the README and has a test that exercises
-// its effect. The table names that test for each flag; the check reads the test's source and
-// wants the flag (or its short form) in it, so a renamed test, a new flag without a test, or a
-// flag dropped from --help but left here all fail.
+// Every flag of every command's --help is documented in the command reference (docs/commands.md)
+// and has a test that exercises its effect. The table names that test for each flag; the check
+// reads the test's source and wants the flag (or its short form) in it, so a renamed test, a new
+// flag without a test, or a flag dropped from --help but left here all fail.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -165,7 +165,9 @@ bool mentions(const std::string& source, const HelpFlag& flag) {
 }
 
 TEST(FlagCoverage, EveryFlagInHelpIsDocumentedAndNamesATestThatPassesIt) {
-  const std::string readme = readFile(fs::path(SOFTBAKE_SOURCE_DIR) / "README.md");
+  const fs::path reference = fs::path(SOFTBAKE_SOURCE_DIR) / "docs" / "commands.md";
+  ASSERT_TRUE(fs::exists(reference)) << reference;
+  const std::string documented = readFile(reference);
   const std::map<std::string, std::string> tests = testSources();
   ASSERT_GT(tests.size(), 300u) << "the test sources were not found";
   std::set<std::pair<std::string, std::string>> listed;
@@ -177,7 +179,7 @@ TEST(FlagCoverage, EveryFlagInHelpIsDocumentedAndNamesATestThatPassesIt) {
       const std::string where =
           (command.empty() ? "softbake" : std::string(command)) + " " + flag.flag;
       inHelp.emplace(command, flag.flag);
-      EXPECT_TRUE(mentions(readme, {flag.flag, ""})) << where << " is not in the README";
+      EXPECT_TRUE(mentions(documented, {flag.flag, ""})) << where << " is not in " << reference;
       const auto entry = std::find_if(
           std::begin(kFlagTests), std::end(kFlagTests),
           [&](const FlagTest& e) { return e.command == command && e.flag == flag.flag; });

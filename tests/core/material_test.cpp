@@ -1,5 +1,5 @@
-// The material presets hold the values the README's Materials table documents: the table is read
-// from the README itself, so the code and the documentation cannot drift apart unnoticed.
+// The material presets hold the values the Materials table documents (docs/materials.md): the table
+// is read from that page itself, so the code and the documentation cannot drift apart unnoticed.
 #include "core/dynamics/material.hpp"
 
 #include <gtest/gtest.h>
@@ -26,14 +26,14 @@ std::string trimmed(const std::string& text) {
   return text.substr(first, text.find_last_not_of(' ') - first + 1);
 }
 
-/// The rows of the table under "## Materials":
+/// The rows of the table under "# Materials" in docs/materials.md, up to the next heading:
 /// | `rubber` (default) | 1000 | 300 | 0.05 | 100 | 40000 | a rubber ball: ... |
-std::vector<DocumentedPreset> readmePresets() {
-  std::ifstream readme(std::filesystem::path(SOFTBAKE_SOURCE_DIR) / "README.md");
+std::vector<DocumentedPreset> documentedPresets() {
+  std::ifstream page(std::filesystem::path(SOFTBAKE_SOURCE_DIR) / "docs" / "materials.md");
   std::vector<DocumentedPreset> presets;
   bool inSection = false;
-  for (std::string line; std::getline(readme, line);) {
-    if (line.rfind("## ", 0) == 0) inSection = line == "## Materials";
+  for (std::string line; std::getline(page, line);) {
+    if (line.rfind("#", 0) == 0) inSection = line == "# Materials";
     if (!inSection || line.rfind("| `", 0) != 0) continue;
     std::vector<std::string> cells;
     std::istringstream row(line.substr(1));
@@ -52,10 +52,10 @@ std::vector<DocumentedPreset> readmePresets() {
   return presets;
 }
 
-TEST(MaterialPresets, HoldTheReadmesValuesInItsOrder) {
-  const std::vector<DocumentedPreset> documented = readmePresets();
+TEST(MaterialPresets, HoldTheDocumentedValuesInTheirOrder) {
+  const std::vector<DocumentedPreset> documented = documentedPresets();
   const std::span<const NamedMaterial> presets = materialPresets();
-  ASSERT_EQ(documented.size(), 4u) << "the README's Materials table was not found";
+  ASSERT_EQ(documented.size(), 4u) << "the Materials table of docs/materials.md was not found";
   ASSERT_EQ(presets.size(), documented.size());
   for (std::size_t i = 0; i < presets.size(); ++i) {
     const DocumentedPreset& doc = documented[i];
@@ -63,7 +63,7 @@ TEST(MaterialPresets, HoldTheReadmesValuesInItsOrder) {
     SCOPED_TRACE(doc.name);
     EXPECT_EQ(preset.name, doc.name);
     EXPECT_EQ(preset.description, doc.character);
-    // The README gives each value to the digit; the presets hold floats.
+    // The table gives each value to the digit; the presets hold floats.
     EXPECT_FLOAT_EQ(float(preset.material.stiffness), float(doc.stiffness));
     EXPECT_FLOAT_EQ(float(preset.material.bendStiffness), float(doc.bendStiffness));
     EXPECT_FLOAT_EQ(float(preset.material.damping), float(doc.damping));
@@ -76,7 +76,7 @@ TEST(MaterialPresets, HoldTheReadmesValuesInItsOrder) {
 }
 
 TEST(MaterialPresets, TheDefaultMaterialIsRubber) {
-  // The README marks `rubber` "(default)": a body with no material gets it.
+  // The table marks `rubber` "(default)": a body with no material gets it.
   const Material fallback;
   const Material rubber = *findMaterialPreset("rubber");
   EXPECT_EQ(fallback.stiffness, rubber.stiffness);
