@@ -1,6 +1,6 @@
 #pragma once
 /// How every command ends on an error: the message on stderr after a blank line (so it stands
-/// apart from a progress bar), and the exit status of the contract the README and --help give:
+/// apart from a progress bar), and the exit status of the contract (docs/commands.md, --help):
 ///   0  done
 ///   1  bad input: a file, key, flag or value that is wrong (the message says which)
 ///   2  the simulation failed: it blew up

@@ -34,7 +34,7 @@ struct ImportedMeshes {
   /// With MeshImportOptions::numberFileVertices, where each vertex of the file went, numbered as
   /// the file numbers them: an OBJ's `v` statements, a PLY's or OFF's vertex list, an STL's facet
   /// corners (three per facet), a glTF's POSITION accessor elements, one primitive after another
-  /// (the README's `pins` section). Other formats leave it unknown.
+  /// (the `pins` section of docs/scene_format.md). Other formats leave it unknown.
   FileVertices fileVertices;
 };
 

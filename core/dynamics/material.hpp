@@ -42,7 +42,7 @@ struct NamedMaterial {
   Material material;
 };
 
-/// The presets in the order of the README's table: stiff, rubber, jelly, balloon (the last soft
+/// The presets in the order of docs/materials.md: stiff, rubber, jelly, balloon (the last soft
 /// in its springs, held up by its gas).
 std::span<const NamedMaterial> materialPresets();
 

@@ -1,4 +1,4 @@
-// The exit-status contract of the README and --help, class by class, through the binary:
+// The exit-status contract of docs/commands.md and --help, class by class, through the binary:
 // 0 done, 1 bad input (flags as well as files), 2 the simulation failed, 3 an output could not be
 // written, 143 SIGTERM (tested with --resume in resume_test.cpp).
 #include <gtest/gtest.h>

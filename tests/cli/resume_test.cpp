@@ -195,7 +195,7 @@ TEST_F(Resume, SigtermLeavesAnIncompleteManifestAndTheResumeCommand) {
   const int status = waitFor(pid);
   const std::string log = readFile(folder_ / "log.txt");
   ASSERT_TRUE(WIFEXITED(status)) << log;
-  EXPECT_EQ(WEXITSTATUS(status), 143) << log;  // 128 + SIGTERM, as the README says
+  EXPECT_EQ(WEXITSTATUS(status), 143) << log;  // 128 + SIGTERM, as docs/commands.md says
   EXPECT_NE(log.find("interrupted by SIGTERM"), std::string::npos) << log;
   EXPECT_NE(log.find("--resume"), std::string::npos) << log;
   const nlohmann::json manifest = readManifestJson(out);
