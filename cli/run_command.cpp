@@ -205,9 +205,7 @@ BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int
       if (!setAsidePairs.empty()) setAsidePairs[std::size_t(frame - 1)] = stats.setAsidePairs;
       totals.contacts += stats.contacts;
       totals.planeContacts += stats.planeContacts;
-      totals.responses.particleResponses += stats.responses.particleResponses;
-      totals.responses.cornerResponses += stats.responses.cornerResponses;
-      totals.responses.edgePushes += stats.responses.edgePushes;
+      totals.responses += stats.responses;
     }
     result.lastFrame = frame;
     const std::uint64_t sinks = plan.sinksPerFrame[std::size_t(frame - 1)];

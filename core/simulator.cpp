@@ -131,20 +131,14 @@ void Simulator::step(int frame) {
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
-    stats_.responses.particleResponses += responses.particleResponses;
-    stats_.responses.cornerResponses += responses.cornerResponses;
-    stats_.responses.edgePushes += responses.edgePushes;
+    stats_.responses += responses;
   }
   stats_.planeContacts +=
       resolvePlaneContacts(topology, substepStart_, state_, response != ResponseMode::None,
                            holds_ ? holds_->touchedPlane() : std::span<std::int32_t>());
   clock.lap(Stage::Planes);
   if (failsafe_) {
-    const FailsafeStats failsafe = failsafe_->apply(topology, detector_, substepStart_, state_, dt);
-    stats_.failsafe.impacts += failsafe.impacts;
-    stats_.failsafe.zoneParticles += failsafe.zoneParticles;
-    stats_.failsafe.frozen += failsafe.frozen;
-    stats_.failsafe.passes += failsafe.passes;
+    stats_.failsafe += failsafe_->apply(topology, detector_, substepStart_, state_, dt);
     clock.lap(Stage::Failsafe);
   }
   if (holds_) stats_.planeContacts += holds_->update(*implicit_);

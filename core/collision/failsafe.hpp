@@ -76,6 +76,14 @@ struct FailsafeStats {
   std::size_t zoneParticles = 0;  ///< particles moved as part of an impact zone
   std::size_t frozen = 0;         ///< substeps that fell back to the start (stage 3)
   std::size_t passes = 0;         ///< detection passes run
+
+  FailsafeStats& operator+=(const FailsafeStats& other) {
+    impacts += other.impacts;
+    zoneParticles += other.zoneParticles;
+    frozen += other.frozen;
+    passes += other.passes;
+    return *this;
+  }
 };
 
 /// One meeting of two primitives: vertices in the order of Impact::weight.

@@ -49,6 +49,13 @@ struct CollisionResponseStats {
   std::size_t particleResponses = 0;  ///< case 1
   std::size_t cornerResponses = 0;    ///< case 2
   std::size_t edgePushes = 0;         ///< edge ends pushed out of a closed surface
+
+  CollisionResponseStats& operator+=(const CollisionResponseStats& other) {
+    particleResponses += other.particleResponses;
+    cornerResponses += other.cornerResponses;
+    edgePushes += other.edgePushes;
+    return *this;
+  }
 };
 
 /// Two hits whose unit normals meet at more than this cosine's angle (30°), and less than its
