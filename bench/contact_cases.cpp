@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
             count.betweenSurfaces, count.withinSurfaces,
             double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
             energy - start);
+      // Each frame's row as it is made: a long bake cut short by a time limit keeps its frames.
+      if (csv) std::fflush(csv);
     }
     if (csv) std::fclose(csv);
     const double wall =
