@@ -322,7 +322,8 @@ int bench(const BenchOptions& options) {
         "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f "
-        "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu "
+        "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu fitted_start=%zu "
+        "fitted_end=%zu "
         "failsafe_passes_per_step=%.1f frozen_substeps=%llu\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
@@ -331,6 +332,7 @@ int bench(const BenchOptions& options) {
         std::string(integratorName(settings.integrator)).c_str(),
         double(record.solverIterations) / double(steps), record.maxVolumeError,
         simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size(),
+        simulator.initialOverlaps().close.size(), simulator.fittedPairs().size(),
         double(record.failsafePasses) / double(steps),
         static_cast<unsigned long long>(record.frozenSubsteps));
     std::fflush(stdout);

@@ -135,6 +135,11 @@ void describeRun(const std::string& name, const Simulator& simulator, bool quiet
                     : cat(responseModeName(collisions.response), " response").c_str());
   else if (collisions.response == ResponseMode::None)
     std::printf("collisions: detection only, no response\n");
+  if (const std::size_t fitted = simulator.initialOverlaps().close.size())
+    std::printf(
+        "fitted faces: %zu triangle pairs of different surfaces start closer than the "
+        "skin; the failsafe keeps them from crossing until they are two skins apart\n",
+        fitted);
   describeInitialOverlaps(simulator);
 }
 

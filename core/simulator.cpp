@@ -1,5 +1,8 @@
 #include "core/simulator.hpp"
 
+#include <algorithm>
+#include <iterator>
+
 #include "core/collision/plane_contact.hpp"
 #include "core/dynamics/integrator.hpp"
 #include "core/error.hpp"
@@ -30,13 +33,21 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   collides_ = collides_ || (moving > 0 && surfaces.size() > 1);
   // Detection only (response "none", the paper's figure 5b) lets bodies pass into each other.
   const CollisionSettings& collisions = topology_->settings.collisions;
-  initialOverlaps_ = findInitialOverlaps(*topology_, state_.position);
+  const bool setAside = collisions.initialOverlap == InitialOverlapMode::SetAside;
+  initialOverlaps_ =
+      findInitialOverlaps(*topology_, state_.position, setAside ? fittedDistance() : Scalar(0));
   if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
     failsafe_.emplace(*topology_);
   if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
-  } else if (collisions.initialOverlap == InitialOverlapMode::SetAside) {
+  } else if (setAside) {
     initiallySetAside_ = initialOverlaps_.pairs;
+    // A pair set aside that no longer intersects is as close as a fit at first: it is left to
+    // the failsafe until it is apart by the skin, or the response would throw the parts apart
+    // where their overlap ends.
+    std::merge(initialOverlaps_.pairs.begin(), initialOverlaps_.pairs.end(),
+               initialOverlaps_.close.begin(), initialOverlaps_.close.end(),
+               std::back_inserter(initiallyFitted_));
   } else {
     // "separate": a body cannot be moved apart from itself, so its own pairs are set aside.
     const std::vector<Index>& surfaceOf = topology_->collision.triangleSurface;
@@ -49,6 +60,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     }
   }
   detector_.setAside(initiallySetAside_);
+  detector_.setFitted(initialOverlaps_.close);
   const IntegratorKind integrator = topology_->settings.integrator;
   if (integrator == IntegratorKind::Implicit) {
     implicit_.emplace(*topology_);
@@ -170,9 +182,22 @@ void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
 }
 
 void Simulator::updateSetAside() {
-  if (initiallySetAside_.empty()) return;
-  stillIntersecting(*topology_, state_.position, initiallySetAside_, setAsideScratch_);
-  detector_.setAside(setAsideScratch_);
+  if (!initiallySetAside_.empty()) {
+    stillIntersecting(*topology_, state_.position, initiallySetAside_, setAsideScratch_);
+    detector_.setAside(setAsideScratch_);
+  }
+  if (!initiallyFitted_.empty()) {
+    // Let go only beyond the reach of two skins, where the boxes of the two no longer meet: a
+    // fit that breathes by a little more than one skin was handed back and forth between the
+    // failsafe and the response, whose lifts at the rims pushed stacked blocks off each other.
+    stillClose(*topology_, state_.position, initiallyFitted_, 2 * fittedDistance(),
+               setAsideScratch_);
+    detector_.setFitted(setAsideScratch_);
+  }
+}
+
+Scalar Simulator::fittedDistance() const {
+  return topology_->settings.skin;
 }
 
 void Simulator::advanceToFrame(int frame) {

@@ -89,6 +89,9 @@ class Simulator {
   const std::vector<TrianglePair>& setAsidePairs() const { return detector_.setAsidePairs(); }
   /// How many pairs were set aside at the start.
   std::size_t initiallySetAsidePairs() const { return initiallySetAside_.size(); }
+  /// The triangle pairs of surfaces fitted onto each other that the response leaves to the
+  /// failsafe now (initial_overlap "set_aside"), sorted.
+  const std::vector<TrianglePair>& fittedPairs() const { return detector_.fittedPairs(); }
   /// Whether the scene has anything the collision pipeline could find (two surfaces, or one
   /// that self-collides); planes are handled on their own.
   bool collides() const { return collides_; }
@@ -121,6 +124,8 @@ class Simulator {
   void nameTangledSurfaces(const InitialOverlaps& overlaps);
   /// Sets aside those of the pairs set aside at the start that intersect now.
   void updateSetAside();
+  /// Faces of two surfaces closer than this at the start are fitted onto each other.
+  Scalar fittedDistance() const;
   void chooseContactAccuracySubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
@@ -142,6 +147,9 @@ class Simulator {
   /// The triangle pairs set aside at the start (all that intersected under "set_aside", a body's
   /// own under "separate"), sorted; and scratch for those still set aside.
   std::vector<TrianglePair> initiallySetAside_, setAsideScratch_;
+  /// Under initial_overlap "set_aside", the pairs that may be fitted: those of different surfaces
+  /// within fittedDistance() at the start, and those set aside. Sorted.
+  std::vector<TrianglePair> initiallyFitted_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
   /// Contacts the next implicit step holds. Like the implicit integrator's warm start, they carry

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace softbake {
 
@@ -183,6 +184,17 @@ double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, con
 double segmentDistance(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1) {
   const std::array<double, 2> s = closestSegmentParameters(p0, p1, q0, q1);
   return ((p0 + s[0] * (p1 - p0)) - (q0 + s[1] * (q1 - q0))).norm();
+}
+
+double triangleDistance(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3>& b) {
+  double distance = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    distance = std::min(distance, pointTriangleDistance(a[k], b[0], b[1], b[2]));
+    distance = std::min(distance, pointTriangleDistance(b[k], a[0], a[1], a[2]));
+    for (int j = 0; j < 3; ++j)
+      distance = std::min(distance, segmentDistance(a[k], a[(k + 1) % 3], b[j], b[(j + 1) % 3]));
+  }
+  return distance;
 }
 
 std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, const PointPath& b,

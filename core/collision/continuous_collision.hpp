@@ -59,5 +59,8 @@ std::array<double, 2> closestSegmentParameters(const Vec3d& p0, const Vec3d& p1,
 double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 /// Distance between segments p0p1 and q0q1.
 double segmentDistance(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1);
+/// Distance between two triangles that do not intersect: the least of their six vertex–face and
+/// nine edge–edge distances (for intersecting ones this is not 0).
+double triangleDistance(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3>& b);
 
 }  // namespace softbake

@@ -10,6 +10,19 @@
 namespace softbake {
 
 namespace {
+/// Removes from `pairs` those of `drop`; both are sorted. One walk along the two, where a search
+/// per pair cost an assembly's step more than its broad phase's filter.
+void dropSortedPairs(std::span<const TrianglePair> drop, std::vector<TrianglePair>& pairs) {
+  if (drop.empty()) return;
+  auto next = drop.begin();
+  std::size_t kept = 0;
+  for (const TrianglePair& pair : pairs) {
+    while (next != drop.end() && *next < pair) ++next;
+    if (next == drop.end() || !(*next == pair)) pairs[kept++] = pair;
+  }
+  pairs.resize(kept);
+}
+
 /// Chunks of pairs for the narrow phase: enough for TBB to balance uneven chunks.
 constexpr std::size_t kPairChunks = 128;
 
@@ -155,16 +168,7 @@ void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
 void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
                                          std::vector<TrianglePair>& pairs) const {
   dropSurfacePairs(geometry, ignoredSurfaces_, pairs);
-  if (setAside_.empty()) return;
-  // Both are sorted: one walk along the two, where a search per pair cost an assembly's step
-  // more than its broad phase's filter.
-  auto aside = setAside_.begin();
-  std::size_t kept = 0;
-  for (const TrianglePair& pair : pairs) {
-    while (aside != setAside_.end() && *aside < pair) ++aside;
-    if (aside == setAside_.end() || !(*aside == pair)) pairs[kept++] = pair;
-  }
-  pairs.resize(kept);
+  dropSortedPairs(setAside_, pairs);
 }
 
 void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
@@ -178,6 +182,7 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
   else
     broadPhase_->findPairs(geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
   dropIgnoredPairs(geometry, pairs_);
+  dropSortedPairs(fitted_, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
   findContacts(topology, motion);
   if (clock) clock->lap(Stage::NarrowPhase);

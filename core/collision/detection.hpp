@@ -65,6 +65,13 @@ class CollisionDetector {
     setAside_.assign(pairs.begin(), pairs.end());
   }
   const std::vector<TrianglePair>& setAsidePairs() const { return setAside_; }
+  /// Triangle pairs of two surfaces fitted onto each other, closer than the skin where the scene
+  /// started and still so: this stage leaves them to the failsafe, which keeps them from crossing
+  /// (initial_overlap "set_aside"). Sorted; replaces the previous ones.
+  void setFitted(std::span<const TrianglePair> pairs) {
+    fitted_.assign(pairs.begin(), pairs.end());
+  }
+  const std::vector<TrianglePair>& fittedPairs() const { return fitted_; }
 
   const std::vector<TrianglePair>& candidatePairs() const { return pairs_; }
   /// Sets what candidatePairs() returns until the next detect(): a resumed run's latest substep's
@@ -107,8 +114,9 @@ class CollisionDetector {
   std::vector<TrianglePair> pairs_;
   std::vector<std::pair<Index, Index>> ignoredSurfaces_;  ///< surface pairs that overlapped, sorted
   std::vector<TrianglePair> setAside_;                    ///< triangle pairs left alone, sorted
-  ChunkBuffers<ParticleContact> chunkHits_;               ///< particle hits, per chunk of pairs
-  ChunkBuffers<EdgeContact> chunkEdges_;                  ///< edge hits, per chunk of pairs
+  std::vector<TrianglePair> fitted_;         ///< triangle pairs left to the failsafe, sorted
+  ChunkBuffers<ParticleContact> chunkHits_;  ///< particle hits, per chunk of pairs
+  ChunkBuffers<EdgeContact> chunkEdges_;     ///< edge hits, per chunk of pairs
   std::vector<EdgeContact> edgeContacts_;
   std::vector<ParticleContact> particleContacts_;
 };

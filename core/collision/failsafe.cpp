@@ -222,6 +222,8 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
       const double thickness = std::max(thickness_[firstSurface], thickness_[secondSurface]);
       const double tolerance = std::max(tolerance_, thickness);
       const double separation = std::max(separation_, thickness);
+      const double friction = std::sqrt(double(geometry.friction[firstSurface]) *
+                                        double(geometry.friction[secondSurface]));
       const auto vertexFace = [&](Index from, Index face) {
         const Triangle& f = geometry.triangleVertices[face];
         for (int k = 0; k < 3; ++k) {
@@ -232,7 +234,8 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
           const std::optional<Impact> impact = vertexFaceImpact(
               path(geometry, start, end, p), path(geometry, start, end, f[0]),
               path(geometry, start, end, f[1]), path(geometry, start, end, f[2]), tolerance);
-          if (impact) found.push_back({{p, f[0], f[1], f[2]}, face, false, separation, *impact});
+          if (impact)
+            found.push_back({{p, f[0], f[1], f[2]}, face, false, separation, friction, *impact});
         }
       };
       vertexFace(first, second);
@@ -269,7 +272,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
           const std::optional<Impact> impact = edgeEdgeImpact(
               path(geometry, start, end, v[0]), path(geometry, start, end, v[1]),
               path(geometry, start, end, v[2]), path(geometry, start, end, v[3]), tolerance);
-          if (impact) found.push_back({v, 0, true, separation, *impact});
+          if (impact) found.push_back({v, 0, true, separation, friction, *impact});
         }
       }
     }
@@ -368,16 +371,18 @@ void CollisionFailsafe::applyImpulses(const SceneTopology& topology, SimulationS
   const Index particles = geometry.particleCount;
   for (const FailsafeImpact& meeting : impacts_) {
     const Vec3d& normal = meeting.impact.normal;
-    double gap = 0, speed = 0, resistance = 0;
+    double gap = 0, resistance = 0;
+    Vec3d relative = Vec3d::Zero();  // the first primitive's velocity relative to the second's
     std::array<double, 4> inverseMass{};
     for (int i = 0; i < 4; ++i) {
       const Index v = meeting.vertex[i];
       const double w = meeting.impact.weight[i];
       gap += w * normal.dot(geometry.vertex(state.position, v).cast<double>());
-      if (v < particles) speed += w * normal.dot(state.velocity[v].cast<double>());
+      if (v < particles) relative += w * state.velocity[v].cast<double>();
       inverseMass[i] = v < particles ? double(topology.inverseMass[v]) : 0.0;
       resistance += w * w * inverseMass[i];
     }
+    const double speed = normal.dot(relative);
     for (Index v : meeting.vertex)
       if (v < particles) moved_[v] = 1;  // measured again next pass, resolved or not
     if (gap >= meeting.separation || resistance <= 0) continue;
@@ -388,12 +393,19 @@ void CollisionFailsafe::applyImpulses(const SceneTopology& topology, SimulationS
     // against a heavy part, flew apart at metres a second and kicked the next part.
     const double impulse = (meeting.separation - gap) / resistance;
     const double stop = std::max(0.0, -speed) / resistance;
+    // Coulomb friction with the same impulse (§7.2): the tangential speed loses at most the
+    // friction coefficient times the normal speed taken. Without it, faces fitted onto each other,
+    // which only this stage holds, slid off one another at the lightest sideways push.
+    const Vec3d tangential = relative - speed * normal;
+    const double slide = tangential.norm();
+    const double slow = slide > 0 ? std::min(slide, meeting.friction * stop * resistance) : 0.0;
+    const Vec3d brake = slow > 0 ? Vec3d(-(slow / resistance / slide) * tangential) : Vec3d::Zero();
     for (int i = 0; i < 4; ++i) {
       if (inverseMass[i] == 0) continue;
-      const Vec3d push = inverseMass[i] * meeting.impact.weight[i] * normal;
+      const double share = inverseMass[i] * meeting.impact.weight[i];
       const Index v = meeting.vertex[i];
-      state.position[v] += (impulse * push).cast<Scalar>();
-      state.velocity[v] += (stop * push).cast<Scalar>();
+      state.position[v] += (impulse * share * normal).cast<Scalar>();
+      state.velocity[v] += (share * (stop * normal + brake)).cast<Scalar>();
     }
   }
 }

@@ -15,12 +15,12 @@
 /// 1. Impulses, in passes: each meeting gets an inelastic, mass-weighted correction along its
 ///    normal that leaves the two primitives `separation` apart at the end of the substep (a
 ///    displacement), and takes from their velocities what approach they had along it (§7.1),
-///    applied one after the other in a fixed order. It conserves momentum; static triangles and
-///    pinned particles do not move. A later pass measures again only the pairs of triangles the
-///    pass before it moved.
-///    An open surface (a sheet, a flag) has no inside to keep anything out of, so it gets a
-///    two-sided skin instead: its material's thickness. Primitives of a sheet meet anything that
-///    comes within its thickness, and are left that far apart.
+///    applied one after the other in a fixed order, with Coulomb friction bounded by the same
+///    impulse (§7.2). It conserves momentum; static triangles and pinned particles do not move. A
+///    later pass measures again only the pairs of triangles the pass before it moved. An open
+///    surface (a sheet, a flag) has no inside to keep anything out of, so it gets a two-sided skin
+///    instead: its material's thickness. Primitives of a sheet meet anything that comes within its
+///    thickness, and are left that far apart.
 /// 2. Impact zones, when passes of impulses leave meetings: the particles of every meeting are
 ///    merged into zones, and each zone moves as one over the substep, with its mean velocity
 ///    (momentum conserved). A translated zone cannot cross itself, zones that meet are merged,
@@ -92,6 +92,7 @@ struct FailsafeImpact {
   Index face = 0;         ///< the struck triangle of a vertex–face meeting
   bool edge = false;      ///< an edge–edge meeting
   double separation = 0;  ///< how far apart it leaves them: the thicker side's thickness, or more
+  double friction = 0;    ///< Coulomb coefficient: the geometric mean of the two surfaces'
   Impact impact;
 };
 

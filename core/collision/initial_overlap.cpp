@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 
+#include "core/collision/continuous_collision.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -13,14 +14,15 @@
 
 namespace softbake {
 
-InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
-                                    std::span<const Vec3> positions) {
+InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions,
+                                    Scalar closeDistance) {
   const CollisionGeometry& geometry = topology.collision;
   InitialOverlaps overlaps;
   if (geometry.triangleVertices.empty()) return overlaps;
   // Boxes of a substep that does not move: each triangle's box around its corners.
   std::vector<Box3> boxes;
-  updateCollisionBoxes(topology, {positions, positions}, boxes);
+  updateCollisionBoxes(topology, {positions, positions}, boxes,
+                       std::max(topology.settings.skin, closeDistance));
   std::vector<CollisionSurface> allSelfColliding = geometry.surfaces;
   for (CollisionSurface& surface : allSelfColliding) surface.selfCollision = surface.moving;
   BroadPhaseInput input = geometry.broadPhaseInput(boxes);
@@ -35,7 +37,38 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
     ++bySurfaces[{geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]}];
   for (const auto& [surfaces, count] : bySurfaces)
     overlaps.bySurfaces.push_back({surfaces.first, surfaces.second, count});
+  if (closeDistance > 0) {
+    std::erase_if(candidates, [&](const TrianglePair& pair) {
+      return geometry.triangleSurface[pair.first] == geometry.triangleSurface[pair.second];
+    });
+    stillClose(topology, positions, candidates, closeDistance, overlaps.close);
+  }
   return overlaps;
+}
+
+void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
+                std::span<const TrianglePair> from, Scalar distance,
+                std::vector<TrianglePair>& out) {
+  const CollisionGeometry& geometry = topology.collision;
+  std::vector<char> close(from.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 256), [&](const tbb::
+                                                                                  blocked_range<
+                                                                                      std::size_t>&
+                                                                                      range) {
+    TrianglePairHits hits;
+    const auto corners = [&](Index t) {
+      const TriangleCorners c = geometry.corners(positions, t);
+      return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
+    };
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const Index t = from[k].first, u = from[k].second;
+      close[k] = !geometry.trianglesCross(positions, t, u, hits) &&
+                 triangleDistance(corners(t), corners(u)) < double(distance);
+    }
+  });
+  out.clear();
+  for (std::size_t k = 0; k < from.size(); ++k)
+    if (close[k]) out.push_back(from[k]);
 }
 
 void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,

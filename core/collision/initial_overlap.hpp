@@ -16,7 +16,9 @@
 ///   assembly whose parts overlap by design, or a mesh that crosses itself, bakes as it is. Near
 ///   the set-aside pairs, the failsafe leaves alone a meeting whose own triangles intersect where
 ///   its substep starts, so the overlap may slide as the bodies deform without new pairs being
-///   pushed.
+///   pushed. Faces of two surfaces fitted closer than the skin (`InitialOverlaps::close`), and the
+///   pairs set aside once they no longer intersect, are left to the failsafe until they are two
+///   skins apart (Simulator::updateSetAside).
 /// - "separate": two different bodies are moved apart as wholes, without velocity, over the first
 ///   frames (core/collision/detangle.hpp), the response and the failsafe leaving them alone
 ///   meanwhile. A body cannot be moved apart from itself: its own pairs are set aside.
@@ -46,11 +48,22 @@ struct SurfaceOverlap {
 struct InitialOverlaps {
   std::vector<TrianglePair> pairs;         ///< sorted, lower triangle first
   std::vector<SurfaceOverlap> bySurfaces;  ///< in order of (first, second) surface
+  /// Pairs of triangles of two different surfaces that do not intersect but lie closer than the
+  /// `closeDistance` asked for: faces fitted onto each other. Sorted.
+  std::vector<TrianglePair> close;
   bool empty() const { return pairs.empty(); }
 };
 
-/// The triangle pairs of `topology` that intersect with its particles at `positions`.
-InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions);
+/// The triangle pairs of `topology` that intersect with its particles at `positions`, and those of
+/// different surfaces closer than `closeDistance` (none when it is 0).
+InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions,
+                                    Scalar closeDistance = 0);
+
+/// The pairs of `from` (sorted) whose triangles are closer than `distance` with the particles at
+/// `positions` and do not intersect, in order, into `out`.
+void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
+                std::span<const TrianglePair> from, Scalar distance,
+                std::vector<TrianglePair>& out);
 
 /// The pairs of `from` (sorted) whose triangles intersect with the particles at `positions`, in
 /// order, into `out`.
