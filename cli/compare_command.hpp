@@ -1,7 +1,7 @@
 #pragma once
-/// `softbake compare A B`: image regression for rendered frames, one pair of PNGs or two folders
-/// of frames. Exit 0 when every frame is within bounds, 1 when one is not, 2 on bad input (a
-/// missing file or frame, images of different sizes).
+/// `softbake compare A B`: regression checks for CI. Two rendered frames or two folders of frames
+/// (cli/image_set_comparison.hpp), a line per frame. Exit 0 when every frame is within bounds, 1
+/// when one is not (or is missing), 2 on bad input.
 
 #include <filesystem>
 #include <optional>
@@ -10,10 +10,16 @@
 namespace softbake {
 
 struct CompareOptions {
-  std::filesystem::path a, b;
-  int tolerance = 8;  ///< largest channel difference (0–255) a pixel may have and still match
-  double maxFraction = 0.001;                 ///< fraction of pixels allowed over the tolerance
-  std::optional<std::filesystem::path> diff;  ///< a PNG, or a folder when comparing folders
+  std::filesystem::path a, b;         ///< reference, new
+  std::optional<std::string> metric;  ///< flip (default), pixel or yee
+  /// A frame fails when more than failPercent % of its pixels are above `fail`, or its mean
+  /// error is above failMean; the same for warnings. Unset: the metric's defaults.
+  std::optional<double> fail, failPercent, failMean, warn, warnPercent, warnMean;
+  std::optional<int> align;  ///< pixels an edge may move
+  /// The pixel metric's thresholds under their old names: `fail` and `failPercent` / 100.
+  std::optional<int> tolerance;
+  std::optional<double> maxFraction;
+  std::optional<std::filesystem::path> diff;  ///< heat maps: a PNG, or a folder for folders
 };
 
 int compareCommand(const CompareOptions& options);

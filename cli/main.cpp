@@ -13,6 +13,7 @@
 #include "cli/compare_command.hpp"
 #include "cli/export_command.hpp"
 #include "cli/farm_command.hpp"
+#include "cli/image_metrics.hpp"
 #include "cli/run_command.hpp"
 #include "cli/scene_command.hpp"
 #include "cli/shell_quote.hpp"
@@ -339,24 +340,45 @@ CLI::App* addVerifyCommand(CLI::App& app, softbake::VerifyOptions& options) {
 CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   CLI::App* compareApp = app.add_subcommand(
       "compare",
-      "Compare two rendered frames (or two folders of frames) for image regression. Exit 0 "
-      "within bounds, 1 when they differ, 2 on bad input.");
-  compareApp->add_option("a", compare.a, "reference PNG or folder")->required();
-  compareApp->add_option("b", compare.b, "new PNG or folder")->required();
+      "Regression checks for CI: two rendered frames (PNG, EXR, TIFF), or two folders of frames "
+      "matched by name, frame by frame. Exit 0 within bounds, 1 when a frame differs or is "
+      "missing, 2 on bad input.");
+  compareApp->add_option("a", compare.a, "reference image or folder of frames")->required();
+  compareApp->add_option("b", compare.b, "new image or folder of frames")->required();
+  compareApp
+      ->add_option("--metric", compare.metric,
+                   "images: flip (perceptual, the default), pixel (largest channel difference, "
+                   "0-255) or yee (OpenImageIO's compare_Yee)")
+      ->check(CLI::IsMember(softbake::imageMetricNames()));
+  const auto number = [&](const char* name, std::optional<double>& value, const char* help) {
+    compareApp->add_option(name, value, help)->check(CLI::NonNegativeNumber);
+  };
+  number("--fail", compare.fail,
+         "a pixel whose error is above this counts against the frame (flip 0.3, pixel 8)");
+  number("--fail-percent", compare.failPercent,
+         "a frame fails when more than this % of its pixels are above --fail (flip 0.05, pixel "
+         "0.1, yee 0.75)");
+  number("--fail-mean", compare.failMean,
+         "a frame fails when its mean error is above this (flip 0.01)");
+  number("--warn", compare.warn, "as --fail, for a warning (flip 0.2, pixel 8)");
+  number("--warn-percent", compare.warnPercent, "as --fail-percent, for a warning");
+  number("--warn-mean", compare.warnMean, "as --fail-mean, for a warning (flip 0.005)");
+  compareApp
+      ->add_option("--align", compare.align,
+                   "pixels an edge may move and still match (default 1; 0 with --tolerance)")
+      ->check(CLI::Range(0, 8));
   compareApp
       ->add_option("--tolerance", compare.tolerance,
-                   "largest channel difference (0-255) a matching pixel may have")
-      ->capture_default_str()
+                   "the pixel metric's --fail: largest channel difference (0-255) a matching pixel "
+                   "may have, pixel against pixel (8)")
       ->check(CLI::Range(0, 255));
   compareApp
       ->add_option("--max-fraction", compare.maxFraction,
-                   "fraction of pixels allowed over the tolerance")
-      ->capture_default_str()
+                   "the pixel metric's --fail-percent as a fraction of the pixels (0.001)")
       ->check(CLI::Range(0.0, 1.0));
   compareApp->add_option(
       "--diff", compare.diff,
-      "write a difference image (a folder of them for folders) where frames differ");
-
+      "write a heat map of the difference (a folder of them for folders) where frames differ");
   return compareApp;
 }
 

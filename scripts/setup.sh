@@ -27,6 +27,7 @@ packages=(
   zlib1g-dev                           # render: PNG deflate; output: the cache files' CRC-32
   libssl-dev                           # output: SHA-256 of a run's input files, in its manifest
   libcli11-dev                         # cli
+  libopenimageio-dev                   # cli: compare reads PNG, EXR and TIFF, Yee's metric
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
