@@ -3,7 +3,10 @@
 #include <cstdio>
 #include <vector>
 
+#include "cli/html_report.hpp"
 #include "cli/image_set_comparison.hpp"
+#include "cli/junit_report.hpp"
+#include "cli/reference_update.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 
@@ -52,9 +55,25 @@ void print(const Comparison& comparison) {
 }
 
 int compare(const CompareOptions& options) {
-  const Comparison comparison =
-      compareImageSets(options.a, options.b, imageThresholds(options), {options.diff}).comparison;
+  ImageSetComparison images = compareImageSets(options.a, options.b, imageThresholds(options),
+                                               {options.diff, options.report});
+  const Comparison& comparison = images.comparison;
   print(comparison);
+  if (options.report) {
+    writeHtmlReport(*options.report, comparison);
+    std::printf("report: %s\n", (*options.report / "index.html").string().c_str());
+  }
+  if (options.junit) {
+    writeJunit(*options.junit, comparison);
+    std::printf("junit: %s\n", options.junit->string().c_str());
+  }
+  if (options.update) {
+    const std::vector<std::string> changes = acceptNewFrames(options.a, images.frames);
+    for (const std::string& change : changes) std::printf("%s\n", change.c_str());
+    std::printf("accepted the new frames as references in %s: %zu files changed\n",
+                options.a.string().c_str(), changes.size());
+    return kCompareSame;
+  }
   return comparison.worst() == Verdict::Fail ? kCompareDiffers : kCompareSame;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 /// `softbake compare A B`: regression checks for CI. Two rendered frames or two folders of frames
-/// (cli/image_set_comparison.hpp), a line per frame. Exit 0 when every frame is within bounds, 1
-/// when one is not (or is missing), 2 on bad input.
+/// (cli/image_set_comparison.hpp); a line per frame, an HTML report, a JUnit file, and `--update`
+/// to accept new frames as the references. Exit 0 when
+/// every frame is within bounds, 1 when one is not (or is missing), 2 on bad input.
 
 #include <filesystem>
 #include <optional>
@@ -19,7 +20,10 @@ struct CompareOptions {
   /// The pixel metric's thresholds under their old names: `fail` and `failPercent` / 100.
   std::optional<int> tolerance;
   std::optional<double> maxFraction;
-  std::optional<std::filesystem::path> diff;  ///< heat maps: a PNG, or a folder for folders
+  std::optional<std::filesystem::path> diff;    ///< heat maps: a PNG, or a folder for folders
+  std::optional<std::filesystem::path> report;  ///< the HTML report's folder
+  std::optional<std::filesystem::path> junit;   ///< the JUnit XML file
+  bool update = false;                          ///< accept the new frames as references
 };
 
 int compareCommand(const CompareOptions& options);

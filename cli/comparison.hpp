@@ -1,5 +1,6 @@
 #pragma once
-/// What a comparison found, item by item (a frame of images), in the form the console prints.
+/// What a comparison found, item by item (a frame of images), in the form the
+/// console, the HTML report (cli/html_report.hpp) and the JUnit file (cli/junit_report.hpp) share.
 
 #include <string>
 #include <vector>
@@ -20,6 +21,8 @@ struct ComparedItem {
   std::vector<std::string> details;  ///< more lines: per body, first frames over a threshold
   double severity = 0;               ///< larger is worse: orders items of one verdict
   bool missing = false;              ///< a frame one side lacks
+  /// Images of the item in the report, relative to its folder; empty when it has none.
+  std::string referenceImage, candidateImage, differenceImage;
 };
 
 struct Comparison {

@@ -49,9 +49,10 @@ std::string limitText(const ErrorLimit& limit, bool yee) {
 
 class FrameComparer {
  public:
-  explicit FrameComparer(const ImageThresholds& thresholds) : thresholds_(thresholds) {}
+  FrameComparer(const ImageThresholds& thresholds, const ImageOutputs& outputs)
+      : thresholds_(thresholds), outputs_(outputs) {}
 
-  /// Compares one pair. `diffPath`: where its heat map goes, if anywhere.
+  /// Compares one pair; writes its pictures. `diffPath`: where its heat map goes, if anywhere.
   ComparedItem compare(const std::string& name, const fs::path& reference,
                        const fs::path& candidate, const std::optional<fs::path>& diffPath) {
     const ColorImage a = readImage(reference), b = readImage(candidate);
@@ -73,12 +74,21 @@ class FrameComparer {
     if (thresholds_.metric != ImageMetric::Yee)
       item.details.push_back(cat(s.overWarn, " pixels (", s.percentOverWarn(),
                                  "%) above the warn value ", thresholds_.warn.value));
-    if (diffPath && result.verdict != Verdict::Pass) writePng(*diffPath, heatMap(a, result.map));
+    Image heat;
+    if (diffPath || outputs_.report) heat = heatMap(a, result.map);
+    if (diffPath && result.verdict != Verdict::Pass) writePng(*diffPath, heat);
+    if (outputs_.report) {
+      const std::string stem = fs::path(name).stem().string();
+      item.referenceImage = writeReportImage(stem + ".ref.png", toImage(a));
+      item.candidateImage = writeReportImage(stem + ".new.png", toImage(b));
+      item.differenceImage = writeReportImage(stem + ".diff.png", heat);
+    }
     return item;
   }
 
-  /// A frame only one side has: a failure.
-  ComparedItem missing(const std::string& name, bool inReference, const fs::path& otherFolder) {
+  /// A frame only one side has: a failure, and its one picture.
+  ComparedItem missing(const std::string& name, const fs::path& present, bool inReference,
+                       const fs::path& otherFolder) {
     ComparedItem item;
     item.name = name;
     item.verdict = Verdict::Fail;
@@ -86,11 +96,23 @@ class FrameComparer {
                                : cat("not in the reference folder ", otherFolder.string());
     item.severity = 1e300;
     item.missing = true;
+    if (outputs_.report) {
+      const std::string file =
+          fs::path(name).stem().string() + (inReference ? ".ref.png" : ".new.png");
+      (inReference ? item.referenceImage : item.candidateImage) =
+          writeReportImage(file, toImage(readImage(present)));
+    }
     return item;
   }
 
  private:
+  std::string writeReportImage(const std::string& file, const Image& image) {
+    writePng(*outputs_.report / "images" / file, image);
+    return "images/" + file;
+  }
+
   const ImageThresholds& thresholds_;
+  const ImageOutputs& outputs_;
 };
 
 }  // namespace
@@ -119,7 +141,8 @@ ImageSetComparison compareImageSets(const fs::path& reference, const fs::path& c
   result.comparison.reference = reference.string();
   result.comparison.candidate = candidate.string();
   result.comparison.thresholds = describeThresholds(thresholds);
-  FrameComparer comparer(thresholds);
+  FrameComparer comparer(thresholds, outputs);
+  if (outputs.report) makeDirectories(*outputs.report / "images");
   if (!folderA) {
     result.comparison.items.push_back(
         comparer.compare(candidate.filename().string(), reference, candidate, outputs.diff));
@@ -141,7 +164,8 @@ ImageSetComparison compareImageSets(const fs::path& reference, const fs::path& c
     const std::string name = present.filename().string();
     ComparedItem& item = result.comparison.items[i];
     if (!pair.reference || !pair.candidate) {
-      item = comparer.missing(name, bool(pair.reference), pair.reference ? candidate : reference);
+      item = comparer.missing(name, present, bool(pair.reference),
+                              pair.reference ? candidate : reference);
     } else {
       std::optional<fs::path> diffPath;
       if (outputs.diff) diffPath = *outputs.diff / (present.stem().string() + ".png");

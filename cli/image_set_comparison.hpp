@@ -27,6 +27,8 @@ struct ImageSetComparison {
 struct ImageOutputs {
   /// A heat map of each frame that does not pass: a PNG for two frames, a folder for folders.
   std::optional<std::filesystem::path> diff;
+  /// The report's folder: every frame's reference, new frame and heat map go to its images/.
+  std::optional<std::filesystem::path> report;
 };
 
 /// Compares `candidate` with `reference`, two image files or two folders. Throws softbake::Error
@@ -36,7 +38,7 @@ ImageSetComparison compareImageSets(const std::filesystem::path& reference,
                                     const std::filesystem::path& candidate,
                                     const ImageThresholds& thresholds, const ImageOutputs& outputs);
 
-/// The thresholds as a sentence, for the summary.
+/// The thresholds as a sentence, for the report and the JUnit file.
 std::string describeThresholds(const ImageThresholds& thresholds);
 
 }  // namespace softbake

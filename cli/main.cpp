@@ -379,6 +379,13 @@ CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   compareApp->add_option(
       "--diff", compare.diff,
       "write a heat map of the difference (a folder of them for folders) where frames differ");
+  compareApp->add_option("--report", compare.report,
+                         "write an HTML report into this folder: index.html and its images");
+  compareApp->add_option("--junit", compare.junit,
+                         "write JUnit XML to this file: a test case per frame");
+  compareApp->add_flag("--update", compare.update,
+                       "accept the new frames as the references (each file replaced atomically); "
+                       "exit 0");
   return compareApp;
 }
 

@@ -33,6 +33,7 @@ packages=(
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
   pybind11-dev python3-dev             # python/: the module softbake, for Debian's python3 (3.11)
   python3-numpy python3-pytest         # python/: its arrays, and its tests (ctest python_tests)
+  chromium                             # tests: compare's HTML report opened headless, offline
 )
 if $fuzz_tools; then
   # libFuzzer ships in clang's runtime package; llvm gives llvm-symbolizer, so a finding's stack

@@ -1,5 +1,5 @@
 // Image regression: FLIP and the metrics in-process, and `softbake compare` on images as pipelines
-// call it: exit codes, thresholds, folders and bad input.
+// call it: exit codes, thresholds, folders, bad input and --update.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
@@ -255,6 +255,67 @@ TEST_F(CompareCommand, EachMetricHasItsFailAndWarnThresholds) {
       verdict("--metric flip --fail 0.5 --fail-mean 1 --warn 0.01 --warn-percent 5 --warn-mean 1"),
       "0 warn");
   EXPECT_EQ(verdict("--metric yee --fail-percent 100"), "0");
+}
+
+TEST_F(CompareCommand, UpdateAcceptsTheNewFramesAndThenComparePasses) {
+  Image changed = gradient(40, 30);
+  changed.rgba.assign(changed.rgba.size(), 200);
+  writePng(folder_ / "b/scene_0002.png", changed);
+  fs::remove(folder_ / "b/scene_0003.png");
+  writePng(folder_ / "b/scene_0004.png", gradient(40, 30));
+  const std::string untouched = readFile(folder_ / "a/scene_0001.png");
+  const auto modified = fs::last_write_time(folder_ / "a/scene_0001.png");
+  test::Result run = compare(path("a") + " " + path("b") + " --update");
+  EXPECT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("scene_0002.png: DIFFERS"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("3 files changed"), std::string::npos) << run.output;
+  EXPECT_EQ(readFile(folder_ / "a/scene_0002.png"), readFile(folder_ / "b/scene_0002.png"));
+  EXPECT_FALSE(fs::exists(folder_ / "a/scene_0003.png")) << "the new frames lack it";
+  EXPECT_TRUE(fs::exists(folder_ / "a/scene_0004.png"));
+  EXPECT_EQ(fs::last_write_time(folder_ / "a/scene_0001.png"), modified) << "it passed: left alone";
+  EXPECT_EQ(readFile(folder_ / "a/scene_0001.png"), untouched);
+  run = compare(path("a") + " " + path("b"));
+  EXPECT_EQ(run.exitCode, 0) << run.output;
+}
+
+TEST_F(CompareCommand, AnInterruptedUpdateLeavesEveryReferenceWholeOldOrNew) {
+  // Three new frames: small, then one too big for the file-size limit below, then small. The
+  // update is cut off at the second, as a full disk or a kill would cut it.
+  Image noise{200, 200, std::vector<std::uint8_t>(200 * 200 * 4)};
+  std::uint32_t state = 12345;
+  for (std::uint8_t& byte : noise.rgba)
+    byte = std::uint8_t((state = state * 1103515245 + 12345) >> 24);
+  Image flat = gradient(40, 30);
+  flat.rgba.assign(flat.rgba.size(), 90);
+  writePng(folder_ / "b/scene_0001.png", flat);
+  writePng(folder_ / "b/scene_0002.png", Image{200, 200, noise.rgba});
+  writePng(folder_ / "b/scene_0003.png", flat);
+  fs::create_directories(folder_ / "a2");
+  for (const char* name : {"scene_0001.png", "scene_0003.png"})
+    fs::copy(folder_ / "a" / name, folder_ / "a2" / name);
+  writePng(folder_ / "a2/scene_0002.png",
+           Image{200, 200, std::vector<std::uint8_t>(200 * 200 * 4, 255)});
+  const std::string old2 = readFile(folder_ / "a2/scene_0002.png"),
+                    old3 = readFile(folder_ / "a2/scene_0003.png");
+  ASSERT_GT(readFile(folder_ / "b/scene_0002.png").size(), 100000u);
+  // ulimit -f counts 1024-byte blocks in bash: 64 KiB.
+  const std::string command =
+      "bash -c " +
+      quoted("ulimit -f 64; exec " + std::string(SOFTBAKE_BINARY) + " compare " +
+             (folder_ / "a2").string() + " " + (folder_ / "b").string() + " --update 2>&1");
+  const test::Result cut = test::runShell(command);
+  const std::string& output = cut.output;
+  EXPECT_EQ(cut.exitCode, 2) << output;
+  EXPECT_NE(output.find("scene_0002.png"), std::string::npos) << output;
+  EXPECT_EQ(readFile(folder_ / "a2/scene_0001.png"), readFile(folder_ / "b/scene_0001.png"))
+      << "written before the cut";
+  EXPECT_EQ(readFile(folder_ / "a2/scene_0002.png"), old2) << "the cut one is whole: the old one";
+  EXPECT_EQ(readFile(folder_ / "a2/scene_0003.png"), old3) << "never reached";
+  for (const std::string& name : test::listDirectory(folder_ / "a2"))
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << "a temporary file left: " << name;
+  const test::Result again = compare(path("a2") + " " + path("b") + " --update");
+  EXPECT_EQ(again.exitCode, 0) << again.output;
+  EXPECT_EQ(compare(path("a2") + " " + path("b")).exitCode, 0);
 }
 
 }  // namespace
