@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "cli/bake_sequence.hpp"
 #include "cli/html_report.hpp"
 #include "cli/image_set_comparison.hpp"
 #include "cli/junit_report.hpp"
@@ -48,16 +49,32 @@ void print(const Comparison& comparison) {
   }
   for (const std::string& note : comparison.notes) std::printf("%s\n", note.c_str());
   const std::size_t fails = comparison.count(Verdict::Fail);
-  const char* unit = comparison.items.size() == 1 ? "frame" : "frames";
+  const bool one = comparison.items.size() == 1;
+  const char* unit =
+      comparison.kind == "images" ? (one ? "frame" : "frames") : (one ? "item" : "items");
   std::printf("%zu %s: %zu within bounds (%zu warn), %zu differ (%zu of them missing); %s\n",
               comparison.items.size(), unit, comparison.items.size() - fails,
               comparison.count(Verdict::Warn), fails, missing, comparison.thresholds.c_str());
 }
 
 int compare(const CompareOptions& options) {
-  ImageSetComparison images = compareImageSets(options.a, options.b, imageThresholds(options),
-                                               {options.diff, options.report});
-  const Comparison& comparison = images.comparison;
+  const bool bakeA = BakeSequence::isBake(options.a), bakeB = BakeSequence::isBake(options.b);
+  Comparison comparison;
+  std::vector<FramePair> frames;
+  if (bakeA || bakeB) {
+    if (!bakeA || !bakeB)
+      throw Error(cat(
+          "compare two bakes or two sets of images, not one of each: ", options.a.string(), " is ",
+          bakeA ? "" : "not ", "a bake, ", options.b.string(), " is ", bakeB ? "" : "not ", "one"));
+    if (options.update || options.diff)
+      throw Error("--update and --diff are for images; bakes are compared, not replaced");
+    comparison = compareBakes(options.a, options.b, options.bake);
+  } else {
+    ImageSetComparison images = compareImageSets(options.a, options.b, imageThresholds(options),
+                                                 {options.diff, options.report});
+    comparison = std::move(images.comparison);
+    frames = std::move(images.frames);
+  }
   print(comparison);
   if (options.report) {
     writeHtmlReport(*options.report, comparison);
@@ -68,7 +85,7 @@ int compare(const CompareOptions& options) {
     std::printf("junit: %s\n", options.junit->string().c_str());
   }
   if (options.update) {
-    const std::vector<std::string> changes = acceptNewFrames(options.a, images.frames);
+    const std::vector<std::string> changes = acceptNewFrames(options.a, frames);
     for (const std::string& change : changes) std::printf("%s\n", change.c_str());
     std::printf("accepted the new frames as references in %s: %zu files changed\n",
                 options.a.string().c_str(), changes.size());

@@ -1,12 +1,14 @@
 #pragma once
-/// `softbake compare A B`: regression checks for CI. Two rendered frames or two folders of frames
-/// (cli/image_set_comparison.hpp); a line per frame, an HTML report, a JUnit file, and `--update`
-/// to accept new frames as the references. Exit 0 when
+/// `softbake compare A B`: regression checks for CI. Two rendered frames, two folders of frames
+/// (cli/image_set_comparison.hpp), or two bakes (cli/bake_comparison.hpp); a line per frame, an
+/// HTML report, a JUnit file, and `--update` to accept new frames as the references. Exit 0 when
 /// every frame is within bounds, 1 when one is not (or is missing), 2 on bad input.
 
 #include <filesystem>
 #include <optional>
 #include <string>
+
+#include "cli/bake_comparison.hpp"
 
 namespace softbake {
 
@@ -24,6 +26,7 @@ struct CompareOptions {
   std::optional<std::filesystem::path> report;  ///< the HTML report's folder
   std::optional<std::filesystem::path> junit;   ///< the JUnit XML file
   bool update = false;                          ///< accept the new frames as references
+  BakeThresholds bake;
 };
 
 int compareCommand(const CompareOptions& options);

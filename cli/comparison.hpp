@@ -1,5 +1,5 @@
 #pragma once
-/// What a comparison found, item by item (a frame of images), in the form the
+/// What a comparison found, item by item (a frame of images, a frame of a bake), in the form the
 /// console, the HTML report (cli/html_report.hpp) and the JUnit file (cli/junit_report.hpp) share.
 
 #include <string>
@@ -25,12 +25,21 @@ struct ComparedItem {
   std::string referenceImage, candidateImage, differenceImage;
 };
 
+/// A line chart over the frames: one series per name.
+struct Plot {
+  std::string title, unit;
+  std::vector<int> frames;
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> series;  ///< per name, a value per frame (NaN: none)
+};
+
 struct Comparison {
-  std::string kind;                  ///< what was compared: "images"
+  std::string kind;                  ///< "images" or "bakes"
   std::string reference, candidate;  ///< as given
   std::string thresholds;            ///< the thresholds in force, as a sentence
   std::vector<ComparedItem> items;
   std::vector<std::string> notes;  ///< lines for the summary: what was not compared, and why
+  std::vector<Plot> plots;
   std::size_t count(Verdict verdict) const;
   Verdict worst() const;
 };

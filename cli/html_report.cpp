@@ -1,6 +1,7 @@
 #include "cli/html_report.hpp"
 
 #include "cli/markup.hpp"
+#include "cli/svg_plot.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
 
@@ -123,6 +124,11 @@ void writeHtmlReport(const std::filesystem::path& folder, const Comparison& comp
   for (const std::string& note : comparison.notes)
     html += cat("<tr><td>note</td><td>", escapeMarkup(note), "</td></tr>\n");
   html += "</table>\n";
+  if (!comparison.plots.empty()) {
+    html += "<section id=\"plots\">\n";
+    for (const Plot& plot : comparison.plots) html += svgLineChart(plot);
+    html += "</section>\n";
+  }
   html +=
       "<table class=\"items\" id=\"items\">\n<thead><tr><th>item</th><th>verdict</th>"
       "<th>numbers</th><th>reference / new</th><th>difference</th></tr></thead>\n<tbody>\n";

@@ -1,6 +1,6 @@
 #pragma once
-/// A comparison as one HTML page a person reads in CI's artifacts: a summary on top, then one row
-/// per item, failures first and worst first, with the reference, the new
+/// A comparison as one HTML page a person reads in CI's artifacts: a summary on top, plots for
+/// bakes, then one row per item, failures first and worst first, with the reference, the new
 /// frame (a slider and a toggle between them) and the difference. Self-contained: the style and
 /// script are inline, the images lie beside it in the same folder, nothing is fetched, so it opens
 /// from a file anywhere the folder is copied.

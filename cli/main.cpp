@@ -340,11 +340,11 @@ CLI::App* addVerifyCommand(CLI::App& app, softbake::VerifyOptions& options) {
 CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   CLI::App* compareApp = app.add_subcommand(
       "compare",
-      "Regression checks for CI: two rendered frames (PNG, EXR, TIFF), or two folders of frames "
-      "matched by name, frame by frame. Exit 0 within bounds, 1 when a frame differs or is "
-      "missing, 2 on bad input.");
-  compareApp->add_option("a", compare.a, "reference image or folder of frames")->required();
-  compareApp->add_option("b", compare.b, "new image or folder of frames")->required();
+      "Regression checks for CI: two rendered frames (PNG, EXR, TIFF), two folders of frames "
+      "matched by name, or two bakes (run output folders or OBJ sequences), frame by frame. Exit "
+      "0 within bounds, 1 when a frame differs or is missing, 2 on bad input.");
+  compareApp->add_option("a", compare.a, "reference image, folder of frames or bake")->required();
+  compareApp->add_option("b", compare.b, "new image, folder of frames or bake")->required();
   compareApp
       ->add_option("--metric", compare.metric,
                    "images: flip (perceptual, the default), pixel (largest channel difference, "
@@ -386,6 +386,19 @@ CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   compareApp->add_flag("--update", compare.update,
                        "accept the new frames as the references (each file replaced atomically); "
                        "exit 0");
+  const auto bakeLimit = [&](const char* name, double& value, const char* help) {
+    compareApp->add_option(name, value, help)->capture_default_str()->check(CLI::NonNegativeNumber);
+  };
+  bakeLimit("--max-distance", compare.bake.maxDistance,
+            "bakes: largest distance of a particle from where the reference has it, as a fraction "
+            "of its body's size");
+  bakeLimit("--max-rms", compare.bake.maxRms,
+            "bakes: RMS distance of a body's particles, as a fraction of its size");
+  bakeLimit("--max-volume-change", compare.bake.maxVolumeChange,
+            "bakes: change of a body's volume, as a fraction of the reference's");
+  bakeLimit("--max-contact-change", compare.bake.maxContactChange,
+            "bakes: change of a body's contact count in a frame, as a fraction of the "
+            "reference's (at least 1)");
   return compareApp;
 }
 
