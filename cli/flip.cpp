@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "cli/image_file.hpp"
+
 namespace softbake {
 
 namespace {
@@ -11,10 +13,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 using Color = std::array<float, 3>;
-
-float srgbToLinear(float c) {
-  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
 
 // Linear sRGB (D65) to CIE XYZ and back (IEC 61966-2-1).
 Color linearRgbToXyz(const Color& c) {

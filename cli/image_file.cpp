@@ -25,11 +25,6 @@ namespace softbake {
 
 namespace {
 
-float linearToSrgb(float c) {
-  c = std::clamp(c, 0.0f, 1.0f);
-  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1 / 2.4f) - 0.055f;
-}
-
 /// Whether the file holds linear light, not display-encoded values: what OpenImageIO says of its
 /// colour space, or, where it says nothing, a float format (EXR, float TIFF).
 bool isLinear(const OIIO::ImageSpec& spec) {
@@ -57,6 +52,15 @@ bool pngEndsWhole(const std::filesystem::path& path) {
 }
 
 }  // namespace
+
+float srgbToLinear(float c) {
+  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+float linearToSrgb(float c) {
+  c = std::clamp(c, 0.0f, 1.0f);
+  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1 / 2.4f) - 0.055f;
+}
 
 ColorImage readImage(const std::filesystem::path& path) {
   std::error_code error;

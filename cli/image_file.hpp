@@ -21,6 +21,11 @@ struct ColorImage {
 /// (missing, not an image, truncated or otherwise unreadable).
 ColorImage readImage(const std::filesystem::path& path);
 
+/// The sRGB transfer function (IEC 61966-2-1) one way and the other, for values in [0, 1]:
+/// display-encoded to linear light, and linear light (clamped to [0, 1]) to display-encoded.
+float srgbToLinear(float encoded);
+float linearToSrgb(float linear);
+
 /// 8 bits per channel, 4 channels: what compare writes.
 struct Image {
   int width = 0, height = 0;

@@ -76,10 +76,6 @@ std::vector<float> alignedErrorMap(const std::vector<std::array<float, N>>& refe
   return map;
 }
 
-float srgbToLinear(float c) {
-  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
-
 /// Yee's metric wants linear light.
 OIIO::ImageBuf linearImageBuf(const ColorImage& image) {
   OIIO::ImageBuf buffer(OIIO::ImageSpec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT));

@@ -9,7 +9,7 @@
 #include <functional>
 #include <string>
 
-#include "tests/cli/softbake_process.hpp"
+#include "tests/compare/check_report.hpp"
 
 namespace softbake {
 namespace {
@@ -74,9 +74,7 @@ TEST_F(BakeCompare, AMaterialChangeFailsNamingTheBodyAndTheFrameWhereItFirstExce
     ++failing;
   EXPECT_GT(failing, 0u);
   const test::Result check =
-      test::runShell(std::string(SOFTBAKE_PYTHON) + " " +
-                     quoted(fs::path(SOFTBAKE_SOURCE_DIR) / "tests/compare/check_report.py") +
-                     " junit " + quoted(junit) + " 10 " + std::to_string(failing) + " 2>&1");
+      test::checkReport("junit " + quoted(junit) + " 10 " + std::to_string(failing));
   EXPECT_EQ(check.exitCode, 0) << check.output;
   // The same, forgiven by thresholds wide enough; a contact count that changes stays a failure
   // until its own threshold is raised.

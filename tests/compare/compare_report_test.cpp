@@ -6,12 +6,13 @@
 #include <string>
 
 #include "cli/image_file.hpp"
-#include "tests/cli/softbake_process.hpp"
+#include "tests/compare/check_report.hpp"
 
 namespace softbake {
 namespace {
 
 namespace fs = std::filesystem;
+using test::checkReport;
 using test::quoted;
 using test::runSoftbake;
 
@@ -26,13 +27,6 @@ Image square(int left, std::uint8_t brightness = 230) {
     for (int x = left; x < left + 16; ++x)
       for (int c = 0; c < 3; ++c) image.rgba[4 * (std::size_t(y) * 48 + x) + c] = brightness;
   return image;
-}
-
-/// check_report.py ARGUMENTS.
-test::Result checkReport(const std::string& arguments) {
-  return test::runShell(std::string(SOFTBAKE_PYTHON) + " " +
-                        quoted(fs::path(SOFTBAKE_SOURCE_DIR) / "tests/compare/check_report.py") +
-                        " " + arguments + " 2>&1");
 }
 
 class CompareReport : public test::CliTest {

@@ -109,7 +109,7 @@ TEST(ImageMetrics, DifferentSizesAreAnError) {
 void writeWithOpenImageIo(const fs::path& path, const ColorImage& image, bool linear) {
   std::vector<float> values = image.rgb;
   if (linear)
-    for (float& v : values) v = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+    for (float& v : values) v = srgbToLinear(v);
   auto out = OIIO::ImageOutput::create(path.string());
   ASSERT_TRUE(out) << path;
   OIIO::ImageSpec spec(image.width, image.height, 3,
