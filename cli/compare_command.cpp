@@ -1,15 +1,15 @@
 #include "cli/compare_command.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <set>
 #include <vector>
 
-#include "cli/image_compare.hpp"
+#include "cli/bake_sequence.hpp"
+#include "cli/html_report.hpp"
+#include "cli/image_set_comparison.hpp"
+#include "cli/junit_report.hpp"
+#include "cli/reference_update.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
-#include "output/atomic_file.hpp"
 
 namespace softbake {
 
@@ -17,84 +17,88 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kWithinBounds = 0, kDiffers = 1, kBadInput = 2;
-
-std::string describe(const ImageDifference& d) {
-  char psnr[32];
-  if (std::isinf(d.psnr))
-    std::snprintf(psnr, sizeof psnr, "identical");
-  else
-    std::snprintf(psnr, sizeof psnr, "PSNR %.1f dB", d.psnr);
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "%.4f%% of pixels over tolerance (%zu), largest difference %d, %s",
-                100 * d.fractionOver(), d.pixelsOverTolerance, d.largestDifference, psnr);
-  return line;
+ImageThresholds imageThresholds(const CompareOptions& options) {
+  const bool legacy = options.tolerance || options.maxFraction;
+  const ImageMetric metric = options.metric ? parseImageMetric(*options.metric)
+                             : legacy       ? ImageMetric::Pixel
+                                            : ImageMetric::Flip;
+  if (legacy && metric != ImageMetric::Pixel)
+    throw Error(
+        cat("--tolerance and --max-fraction are the pixel metric's thresholds; for --metric ",
+            imageMetricName(metric), " use --fail and --fail-percent"));
+  ImageThresholds t = defaultThresholds(metric);
+  // The old flags keep their old meaning: every pixel against the same pixel.
+  if (legacy) t.align = 0;
+  if (options.tolerance) t.fail.value = *options.tolerance;
+  if (options.maxFraction) t.fail.percent = 100 * *options.maxFraction;
+  if (options.fail) t.fail.value = *options.fail;
+  if (options.failPercent) t.fail.percent = *options.failPercent;
+  if (options.failMean) t.fail.mean = *options.failMean;
+  if (options.warn) t.warn.value = *options.warn;
+  if (options.warnPercent) t.warn.percent = *options.warnPercent;
+  if (options.warnMean) t.warn.mean = *options.warnMean;
+  if (options.align) t.align = *options.align;
+  return t;
 }
 
-/// Compares one pair; prints one line starting with `label`. Returns the exit code for the pair.
-int comparePair(const std::string& label, const fs::path& a, const fs::path& b,
-                const CompareOptions& options, const std::optional<fs::path>& diffPath) {
-  Image diff;
-  const ImageDifference d =
-      compareImages(loadImage(a), loadImage(b), options.tolerance, diffPath ? &diff : nullptr);
-  const bool within = d.fractionOver() <= options.maxFraction;
-  std::printf("%s: %s: %s\n", label.c_str(), within ? "ok" : "DIFFERS", describe(d).c_str());
-  if (diffPath && !within) writePng(*diffPath, diff);
-  return within ? kWithinBounds : kDiffers;
-}
-
-std::set<std::string> pngNames(const fs::path& folder) {
-  std::set<std::string> names;
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
-    std::string extension = entry.path().extension().string();
-    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (entry.is_regular_file() && extension == ".png")
-      names.insert(entry.path().filename().string());
+void print(const Comparison& comparison) {
+  std::size_t missing = 0;
+  for (const ComparedItem& item : comparison.items) {
+    std::printf("%s: %s: %s\n", item.name.c_str(), verdictName(item.verdict), item.summary.c_str());
+    missing += item.missing;
   }
-  return names;
+  for (const std::string& note : comparison.notes) std::printf("%s\n", note.c_str());
+  const std::size_t fails = comparison.count(Verdict::Fail);
+  const bool one = comparison.items.size() == 1;
+  const char* unit =
+      comparison.kind == "images" ? (one ? "frame" : "frames") : (one ? "item" : "items");
+  std::printf("%zu %s: %zu within bounds (%zu warn), %zu differ (%zu of them missing); %s\n",
+              comparison.items.size(), unit, comparison.items.size() - fails,
+              comparison.count(Verdict::Warn), fails, missing, comparison.thresholds.c_str());
 }
 
-int compareFolders(const CompareOptions& options) {
-  const std::set<std::string> inA = pngNames(options.a), inB = pngNames(options.b);
-  if (inA.empty()) throw Error(cat(options.a.string(), ": no PNG frames in this folder"));
-  if (options.diff) makeDirectories(*options.diff);
-  int worst = kWithinBounds;
-  std::size_t differing = 0, missing = 0;
-  std::set<std::string> all = inA;
-  all.insert(inB.begin(), inB.end());
-  for (const std::string& name : all) {
-    if (!inA.count(name) || !inB.count(name)) {
-      std::printf("%s: missing in %s\n", name.c_str(),
-                  (inA.count(name) ? options.b : options.a).string().c_str());
-      ++missing;
-      continue;
-    }
-    std::optional<fs::path> diffPath;
-    if (options.diff) diffPath = *options.diff / name;
-    const int result = comparePair(name, options.a / name, options.b / name, options, diffPath);
-    differing += result != kWithinBounds;
-    worst = std::max(worst, result);
+int compare(const CompareOptions& options) {
+  const bool bakeA = BakeSequence::isBake(options.a), bakeB = BakeSequence::isBake(options.b);
+  Comparison comparison;
+  std::vector<FramePair> frames;
+  if (bakeA || bakeB) {
+    if (!bakeA || !bakeB)
+      throw Error(cat(
+          "compare two bakes or two sets of images, not one of each: ", options.a.string(), " is ",
+          bakeA ? "" : "not ", "a bake, ", options.b.string(), " is ", bakeB ? "" : "not ", "one"));
+    if (options.update || options.diff)
+      throw Error("--update and --diff are for images; bakes are compared, not replaced");
+    comparison = compareBakes(options.a, options.b, options.bake);
+  } else {
+    ImageSetComparison images = compareImageSets(options.a, options.b, imageThresholds(options),
+                                                 {options.diff, options.report});
+    comparison = std::move(images.comparison);
+    frames = std::move(images.frames);
   }
-  std::printf(
-      "%zu frames: %zu within bounds, %zu differ, %zu missing (tolerance %d, max fraction %g)\n",
-      all.size(), all.size() - differing - missing, differing, missing, options.tolerance,
-      options.maxFraction);
-  return missing ? kBadInput : worst;
+  print(comparison);
+  if (options.report) {
+    writeHtmlReport(*options.report, comparison);
+    std::printf("report: %s\n", (*options.report / "index.html").string().c_str());
+  }
+  if (options.junit) {
+    writeJunit(*options.junit, comparison);
+    std::printf("junit: %s\n", options.junit->string().c_str());
+  }
+  if (options.update) {
+    const std::vector<std::string> changes = acceptNewFrames(options.a, frames);
+    for (const std::string& change : changes) std::printf("%s\n", change.c_str());
+    std::printf("accepted the new frames as references in %s: %zu files changed\n",
+                options.a.string().c_str(), changes.size());
+    return kCompareSame;
+  }
+  return comparison.worst() == Verdict::Fail ? kCompareDiffers : kCompareSame;
 }
 
 }  // namespace
 
 int compareCommand(const CompareOptions& options) {
   try {
-    std::error_code error;
-    const bool folderA = fs::is_directory(options.a, error),
-               folderB = fs::is_directory(options.b, error);
-    if (folderA != folderB)
-      throw Error(cat("compare two images or two folders, not one of each: ", options.a.string(),
-                      ", ", options.b.string()));
-    if (folderA) return compareFolders(options);
-    return comparePair(options.b.filename().string(), options.a, options.b, options, options.diff);
+    return compare(options);
   } catch (const Error& error) {
     std::fflush(stdout);
     std::fprintf(stderr, "softbake: error: %s\n", error.what());
@@ -102,7 +106,7 @@ int compareCommand(const CompareOptions& options) {
     std::fflush(stdout);
     std::fprintf(stderr, "softbake: error: %s\n", error.what());
   }
-  return kBadInput;
+  return kCompareBadInput;
 }
 
 }  // namespace softbake

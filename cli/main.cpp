@@ -13,6 +13,7 @@
 #include "cli/compare_command.hpp"
 #include "cli/export_command.hpp"
 #include "cli/farm_command.hpp"
+#include "cli/image_metrics.hpp"
 #include "cli/run_command.hpp"
 #include "cli/scene_command.hpp"
 #include "cli/shell_quote.hpp"
@@ -339,24 +340,65 @@ CLI::App* addVerifyCommand(CLI::App& app, softbake::VerifyOptions& options) {
 CLI::App* addCompareCommand(CLI::App& app, softbake::CompareOptions& compare) {
   CLI::App* compareApp = app.add_subcommand(
       "compare",
-      "Compare two rendered frames (or two folders of frames) for image regression. Exit 0 "
-      "within bounds, 1 when they differ, 2 on bad input.");
-  compareApp->add_option("a", compare.a, "reference PNG or folder")->required();
-  compareApp->add_option("b", compare.b, "new PNG or folder")->required();
+      "Regression checks for CI: two rendered frames (PNG, EXR, TIFF), two folders of frames "
+      "matched by name, or two bakes (run output folders or OBJ sequences), frame by frame. Exit "
+      "0 within bounds, 1 when a frame differs or is missing, 2 on bad input.");
+  compareApp->add_option("a", compare.a, "reference image, folder of frames or bake")->required();
+  compareApp->add_option("b", compare.b, "new image, folder of frames or bake")->required();
+  compareApp
+      ->add_option("--metric", compare.metric,
+                   "images: flip (perceptual, the default), pixel (largest channel difference, "
+                   "0-255) or yee (OpenImageIO's compare_Yee)")
+      ->check(CLI::IsMember(softbake::imageMetricNames()));
+  const auto number = [&](const char* name, std::optional<double>& value, const char* help) {
+    compareApp->add_option(name, value, help)->check(CLI::NonNegativeNumber);
+  };
+  number("--fail", compare.fail,
+         "a pixel whose error is above this counts against the frame (flip 0.3, pixel 8)");
+  number("--fail-percent", compare.failPercent,
+         "a frame fails when more than this % of its pixels are above --fail (flip 0.05, pixel "
+         "0.1, yee 0.75)");
+  number("--fail-mean", compare.failMean,
+         "a frame fails when its mean error is above this (flip 0.01)");
+  number("--warn", compare.warn, "as --fail, for a warning (flip 0.2, pixel 8)");
+  number("--warn-percent", compare.warnPercent, "as --fail-percent, for a warning");
+  number("--warn-mean", compare.warnMean, "as --fail-mean, for a warning (flip 0.005)");
+  compareApp
+      ->add_option("--align", compare.align,
+                   "pixels an edge may move and still match (default 1; 0 with --tolerance)")
+      ->check(CLI::Range(0, 8));
   compareApp
       ->add_option("--tolerance", compare.tolerance,
-                   "largest channel difference (0-255) a matching pixel may have")
-      ->capture_default_str()
+                   "the pixel metric's --fail: largest channel difference (0-255) a matching pixel "
+                   "may have, pixel against pixel (8)")
       ->check(CLI::Range(0, 255));
   compareApp
       ->add_option("--max-fraction", compare.maxFraction,
-                   "fraction of pixels allowed over the tolerance")
-      ->capture_default_str()
+                   "the pixel metric's --fail-percent as a fraction of the pixels (0.001)")
       ->check(CLI::Range(0.0, 1.0));
   compareApp->add_option(
       "--diff", compare.diff,
-      "write a difference image (a folder of them for folders) where frames differ");
-
+      "write a heat map of the difference (a folder of them for folders) where frames differ");
+  compareApp->add_option("--report", compare.report,
+                         "write an HTML report into this folder: index.html and its images");
+  compareApp->add_option("--junit", compare.junit,
+                         "write JUnit XML to this file: a test case per frame");
+  compareApp->add_flag("--update", compare.update,
+                       "accept the new frames as the references (each file replaced atomically); "
+                       "exit 0");
+  const auto bakeLimit = [&](const char* name, double& value, const char* help) {
+    compareApp->add_option(name, value, help)->capture_default_str()->check(CLI::NonNegativeNumber);
+  };
+  bakeLimit("--max-distance", compare.bake.maxDistance,
+            "bakes: largest distance of a particle from where the reference has it, as a fraction "
+            "of its body's size");
+  bakeLimit("--max-rms", compare.bake.maxRms,
+            "bakes: RMS distance of a body's particles, as a fraction of its size");
+  bakeLimit("--max-volume-change", compare.bake.maxVolumeChange,
+            "bakes: change of a body's volume, as a fraction of the reference's");
+  bakeLimit("--max-contact-change", compare.bake.maxContactChange,
+            "bakes: change of a body's contact count in a frame, as a fraction of the "
+            "reference's (at least 1)");
   return compareApp;
 }
 

@@ -27,11 +27,13 @@ packages=(
   zlib1g-dev                           # render: PNG deflate; output: the cache files' CRC-32
   libssl-dev                           # output: SHA-256 of a run's input files, in its manifest
   libcli11-dev                         # cli
+  libopenimageio-dev                   # cli: compare reads PNG, EXR and TIFF, Yee's metric
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libcgal-dev                          # tests: exact triangle–triangle intersection (the checker)
   libbullet-dev                        # the peer benchmark (Bullet btSoftBody)
   pybind11-dev python3-dev             # python/: the module softbake, for Debian's python3 (3.11)
   python3-numpy python3-pytest         # python/: its arrays, and its tests (ctest python_tests)
+  chromium                             # tests: compare's HTML report opened headless, offline
 )
 if $fuzz_tools; then
   # libFuzzer ships in clang's runtime package; llvm gives llvm-symbolizer, so a finding's stack

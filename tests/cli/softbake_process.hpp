@@ -32,11 +32,8 @@ inline std::string quoted(const std::filesystem::path& path) {
   return quoted(path.string());
 }
 
-/// `softbake ARGUMENTS`, stdout and stderr together; with `stderrToo` false stderr is dropped,
-/// so the output is exactly what a pipe would read.
-inline Result runSoftbake(const std::string& arguments, bool stderrToo = true) {
-  const std::string command =
-      std::string(SOFTBAKE_BINARY) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");
+/// A shell command's exit code and its stdout (what the command line sends there).
+inline Result runShell(const std::string& command) {
   Result result;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return result;
@@ -47,6 +44,13 @@ inline Result runSoftbake(const std::string& arguments, bool stderrToo = true) {
   const int status = pclose(pipe);
   result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+/// `softbake ARGUMENTS`, stdout and stderr together; with `stderrToo` false stderr is dropped,
+/// so the output is exactly what a pipe would read.
+inline Result runSoftbake(const std::string& arguments, bool stderrToo = true) {
+  return runShell(std::string(SOFTBAKE_BINARY) + " " + arguments +
+                  (stderrToo ? " 2>&1" : " 2>/dev/null"));
 }
 
 /// A fresh folder per test under the system temp folder, removed afterwards.

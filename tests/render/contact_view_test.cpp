@@ -29,7 +29,7 @@ using test::makeRenderer;
 using test::showsContactColor;
 
 constexpr int kWidth = 640, kHeight = 360;  // the size the issue measured at
-constexpr int kTolerance = 8;               // per channel, as `softbake compare` defaults to
+constexpr int kTolerance = 8;               // per channel, as `softbake compare --metric pixel`
 
 RenderOptions figureOptions() {
   RenderOptions options;
