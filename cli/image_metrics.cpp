@@ -132,10 +132,6 @@ std::string_view imageMetricName(ImageMetric metric) {
   return "flip";
 }
 
-std::vector<std::string> imageMetricNames() {
-  return {"flip", "pixel", "yee"};
-}
-
 ImageMetric parseImageMetric(std::string_view name) {
   for (const ImageMetric metric : {ImageMetric::Flip, ImageMetric::Pixel, ImageMetric::Yee})
     if (imageMetricName(metric) == name) return metric;

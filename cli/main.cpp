@@ -2,11 +2,17 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <string>
+#include <system_error>
+
+#include <unistd.h>
 
 #include "cli/bench_command.hpp"
 #include "cli/command_errors.hpp"
@@ -448,6 +454,26 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
   return benchApp;
 }
 
+#ifndef SOFTBAKE_COMPARE_PROGRAM
+/// `softbake compare`: the program softbake-compare beside this one, in this process's place, with
+/// the same arguments (cli/CMakeLists.txt says why it is a program of its own). Returns only when
+/// it cannot be started: exit 2, as compare's bad input.
+int runCompareProgram(char** argv) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  const std::filesystem::path program = self.parent_path() / "softbake-compare";
+  if (!error) {
+    argv[0] = const_cast<char*>(program.c_str());
+    ::execv(program.c_str(), argv);
+  }
+  const int why = error ? error.value() : errno;
+  std::fprintf(stderr, "error: compare: cannot run %s: %s\n",
+               error ? "softbake-compare (this program's path is unknown)" : program.c_str(),
+               std::strerror(why));
+  return 2;
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -523,7 +549,11 @@ int main(int argc, char** argv) {
     return softbake::farmSlurmCommand(farm);
   }
   if (verifyApp->parsed()) return softbake::verifyCommand(verify);
+#ifdef SOFTBAKE_COMPARE_PROGRAM
   if (compareApp->parsed()) return softbake::compareCommand(compare);
+#else
+  if (compareApp->parsed()) return runCompareProgram(argv);
+#endif
   if (benchApp->parsed()) return softbake::benchCommand(bench);
   if (sceneApp->parsed()) return softbake::sceneCommand(scene);
   return 0;
