@@ -447,6 +447,19 @@ INSTANTIATE_TEST_SUITE_P(HardCases, ContactExampleFrame,
                                            std::pair("flag_fold", 48)),
                          [](const auto& param) { return std::string(param.param.first); });
 
+/// The negative control of the contact frames: the folding flag's frame rendered without its
+/// contact spheres must fail against its golden frame, or the comparison could not see contacts go
+/// missing.
+TEST_F(CliTest, AContactFrameWithoutItsContactsFailsItsGoldenFrame) {
+  const fs::path out = folder_ / "no_contacts";
+  const Result run = runSoftbake(
+      "run " + quoted((examples() / "flag_fold.json").string()) +
+      " --render --size 320x240 --frames 48 --no-contact-spheres -q -o " + quoted(out.string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_EQ(compareFrames(golden("flag_fold_0048.png"), out / "png" / "flag_fold_0048.png"), 1)
+      << "a frame without its contacts passed as the golden frame";
+}
+
 TEST_F(CliTest, RenderedFramesMatchTheGoldenFrames) {
   renderSmall("", folder_ / "default");
   renderSmall((examples() / "fig5_ground.json").string(), folder_ / "fig5");
