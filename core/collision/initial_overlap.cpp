@@ -14,6 +14,24 @@
 
 namespace softbake {
 
+namespace {
+/// The pairs of `from` for which `keep(pair, hits)` holds, in order, into `out`: tested in
+/// parallel, each range with its own scratch hits, then gathered in order.
+template <typename Keep>
+void keepPairs(std::span<const TrianglePair> from, std::vector<TrianglePair>& out, Keep keep) {
+  std::vector<char> kept(from.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      TrianglePairHits hits;
+                      for (std::size_t k = range.begin(); k != range.end(); ++k)
+                        kept[k] = keep(from[k], hits);
+                    });
+  out.clear();
+  for (std::size_t k = 0; k < from.size(); ++k)
+    if (kept[k]) out.push_back(from[k]);
+}
+}  // namespace
+
 InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions,
                                     Scalar closeDistance) {
   const CollisionGeometry& geometry = topology.collision;
@@ -50,41 +68,22 @@ void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
                 std::span<const TrianglePair> from, Scalar distance,
                 std::vector<TrianglePair>& out) {
   const CollisionGeometry& geometry = topology.collision;
-  std::vector<char> close(from.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 256), [&](const tbb::
-                                                                                  blocked_range<
-                                                                                      std::size_t>&
-                                                                                      range) {
-    TrianglePairHits hits;
-    const auto corners = [&](Index t) {
-      const TriangleCorners c = geometry.corners(positions, t);
-      return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
-    };
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const Index t = from[k].first, u = from[k].second;
-      close[k] = !geometry.trianglesCross(positions, t, u, hits) &&
-                 triangleDistance(corners(t), corners(u)) < double(distance);
-    }
+  const auto corners = [&](Index t) {
+    const TriangleCorners c = geometry.corners(positions, t);
+    return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
+  };
+  keepPairs(from, out, [&](const TrianglePair& pair, TrianglePairHits& hits) {
+    return !geometry.trianglesCross(positions, pair.first, pair.second, hits) &&
+           triangleDistance(corners(pair.first), corners(pair.second)) < double(distance);
   });
-  out.clear();
-  for (std::size_t k = 0; k < from.size(); ++k)
-    if (close[k]) out.push_back(from[k]);
 }
 
 void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
                        std::span<const TrianglePair> from, std::vector<TrianglePair>& out) {
   const CollisionGeometry& geometry = topology.collision;
-  std::vector<char> intersects(from.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 256),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      TrianglePairHits hits;
-                      for (std::size_t k = range.begin(); k != range.end(); ++k)
-                        intersects[k] =
-                            geometry.trianglesCross(positions, from[k].first, from[k].second, hits);
-                    });
-  out.clear();
-  for (std::size_t k = 0; k < from.size(); ++k)
-    if (intersects[k]) out.push_back(from[k]);
+  keepPairs(from, out, [&](const TrianglePair& pair, TrianglePairHits& hits) {
+    return geometry.trianglesCross(positions, pair.first, pair.second, hits);
+  });
 }
 
 std::string_view initialOverlapModeName(InitialOverlapMode mode) {
