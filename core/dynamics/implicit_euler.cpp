@@ -55,6 +55,9 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
   static_assert(kChunk % SlicedSpringMatrix::kLanes == 0, "a chunk holds whole slices");
   held_.reserve(topology.particleCount());
   const std::size_t n = topology.particleCount();
+  for (std::size_t i = 0; i < n; ++i)
+    if (topology.inverseMass[i] != 0) massNorm_ += double(topology.mass[i]) * topology.mass[i];
+  massNorm_ = std::sqrt(massNorm_);
   volumeBodyOf_.assign(topology.bodies.size(), kNoVolumeBody);
   for (Index b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
@@ -178,6 +181,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
   const std::size_t n = topology.particleCount();
   constexpr std::size_t kLanes = SlicedSpringMatrix::kLanes;
   const Scalar h = dt;
+  gravityImpulse_ = h * topology.settings.gravity;
   const bool volume = !volumeBodies_.empty();
   if (volume) {
     for (std::size_t k = 0; k < volumeBodies_.size(); ++k)
@@ -267,8 +271,9 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
           preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
           direction_[i] = preconditioned_[i];
           first += dot(residual_[i], preconditioned_[i]);
-          const Vec3 rhs = filtered(Index(i), rhs_[i]);
-          second += dot(rhs, rhs);
+          if (inverseMass[i] == 0) continue;
+          const Vec3 load = filtered(Index(i), rhs_[i] - topology.mass[i] * gravityImpulse_);
+          second += dot(load, load);
         }
         break;
       case Pass::ResidualNorm:
@@ -323,7 +328,8 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         return true;
       case Pass::Residual:
         rz = total.first;
-        rhsNorm = std::sqrt(total.second);
+        rhsNorm = std::max(std::sqrt(total.second),
+                           kGravityShare * double(gravityImpulse_.norm()) * massNorm_);
         zeroRhs = rhsNorm == 0;
         tolerance = kTolerance * rhsNorm;
         pass = Pass::ResidualNorm;
