@@ -75,14 +75,17 @@ inline constexpr double kShortEdgeQuantile = 0.05;
 /// falling side by side, take few substeps. A pair's closing speed is the difference of the two
 /// surfaces' mean velocities (mass-weighted) plus each one's largest deviation from its mean
 /// (deformation and spin), or the speed of the faster surface's fastest vertex where that is less
-/// (the measure kContactReachFraction was calibrated with), plus what gravity adds over the frame.
-/// Surfaces already in contact (`touching`: the broad phase's triangle pairs of the latest substep)
-/// count with the speed of the fastest corner of a touching triangle pair plus gravity's. Any other
-/// pair counts when its bounding boxes, each grown by how far it can travel in the frame plus the
-/// skin, overlap; a self-colliding body counts against itself. Ground planes are not surfaces here:
-/// their contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps to
-/// kMaxAutoSubsteps.
-/// Where a collision surface is and how fast it can move, for the contact-accuracy rule.
+/// (the measure kContactReachFraction was calibrated with), plus what gravity adds over the frame
+/// where something can hold one of them (a plane, a static surface or a pin it can reach within
+/// the frame, or a surface in contact with one). Surfaces already in contact (`touching`: the
+/// broad phase's triangle pairs of the latest substep) count with the speed of the fastest corner
+/// of a touching triangle pair plus gravity's where they are held, and with how fast the corners
+/// of the pair move apart where nothing holds them (parts of an assembly falling together). Any
+/// other pair counts when its bounding boxes, each grown by how far it can travel in the frame plus
+/// the skin, overlap; a self-colliding body counts against itself. Ground planes are not surfaces
+/// here: their contacts are resolved exactly at any step. Re-chosen every frame; kMinAutoSubsteps
+/// to kMaxAutoSubsteps. Where a collision surface is and how fast it can move, for the
+/// contact-accuracy rule.
 struct SurfaceMotion {
   /// Where the surface can be within the frame: its bounds grown by its travel and the skin.
   Box3 box;
@@ -103,6 +106,8 @@ struct ContactAccuracy {
 struct ContactAccuracyScratch {
   std::vector<std::uint64_t> touchingSurfaces;
   std::vector<SurfaceMotion> motion;
+  std::vector<std::uint32_t> group;  ///< union-find over the surfaces in contact
+  std::vector<char> held;
 };
 ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
