@@ -2,7 +2,9 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <regex>
@@ -74,8 +76,18 @@ void describeInitialOverlaps(const Simulator& simulator) {
   const InitialOverlaps& overlaps = simulator.initialOverlaps();
   if (overlaps.empty()) return;
   const SceneTopology& topology = simulator.topology();
+  // The pairs of surfaces with the most triangle pairs first, and only the first few: a building
+  // of 294 parts listed 580 pairs of surfaces, 100 kB on one line.
+  constexpr std::size_t kListed = 8;
+  std::vector<SurfaceOverlap> largest = overlaps.bySurfaces;
+  std::stable_sort(largest.begin(), largest.end(),
+                   [](const auto& a, const auto& b) { return a.trianglePairs > b.trianglePairs; });
+  std::uint64_t unlistedPairs = 0;
+  for (std::size_t k = kListed; k < largest.size(); ++k) unlistedPairs += largest[k].trianglePairs;
+  const std::size_t unlisted = largest.size() - std::min(largest.size(), kListed);
+  largest.resize(std::min(largest.size(), kListed));
   std::string list;
-  for (const SurfaceOverlap& overlap : overlaps.bySurfaces) {
+  for (const SurfaceOverlap& overlap : largest) {
     list += list.empty() ? "" : ", ";
     list += overlap.firstSurface == overlap.secondSurface
                 ? cat("'", topology.surfaceName(overlap.firstSurface), "' with itself")
@@ -83,6 +95,8 @@ void describeInitialOverlaps(const Simulator& simulator) {
                       topology.surfaceName(overlap.secondSurface), "'");
     list += cat(" (", overlap.trianglePairs, " triangle pairs)");
   }
+  if (unlisted > 0)
+    list += cat(" and ", unlisted, " more pairs of surfaces (", unlistedPairs, " triangle pairs)");
   std::string what;
   switch (topology.settings.collisions.initialOverlap) {
     case InitialOverlapMode::SetAside:

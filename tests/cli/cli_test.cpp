@@ -348,6 +348,32 @@ TEST_F(CliTest, BodiesThatStartInsideEachOtherAreReportedWithWhatTheRunDoes) {
   EXPECT_EQ(apart.output.find("intersect at the start"), std::string::npos) << apart.output;
 }
 
+/// A row of ten balls, each overlapping the next: nine pairs of surfaces, of which the warning
+/// names the eight with the most triangle pairs and counts the rest, where an imported building
+/// once printed 100 kB on one line.
+TEST_F(CliTest, TheInitialOverlapWarningNamesTheLargestPairsAndCountsTheRest) {
+  std::string bodies;
+  for (int k = 0; k < 10; ++k)
+    bodies += (k ? ", " : "") + std::string(R"({"name": "b)") + std::to_string(k) +
+              R"(", "mesh": {"primitive": "icosphere"}, "transform": {"translate": [)" +
+              std::to_string(0.8 * k) + ", 1, 0]}}";
+  const fs::path scene =
+      writeScene("row.json", R"({"settings": {"frames": 2}, "bodies": [)" + bodies + "]}");
+  const Result run =
+      runSoftbake("run " + quoted(scene.string()) + " --frames 1 --no-render -q -o " +
+                  quoted((folder_ / "row").string()));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const std::size_t line = run.output.find("surfaces intersect at the start:");
+  ASSERT_NE(line, std::string::npos) << run.output;
+  const std::string warning = run.output.substr(line, run.output.find('\n', line) - line);
+  int named = 0;
+  for (std::size_t at = warning.find("' and '"); at != std::string::npos;
+       at = warning.find("' and '", at + 1))
+    ++named;
+  EXPECT_EQ(named, 8) << warning;
+  EXPECT_NE(warning.find(" and 1 more pairs of surfaces ("), std::string::npos) << warning;
+}
+
 TEST_F(CliTest, SceneKeyIntegratorIsReadAndCheckedWithItsPath) {
   const fs::path scene = writeScene("implicit.json", R"({"settings": {"integrator": "implicit",
     "frames": 3}, "bodies": [{"name": "ball", "mesh": {"primitive": "icosphere"}}]})");
