@@ -146,9 +146,9 @@ Comparison compareBakes(const std::filesystem::path& reference,
   all.insert(framesB.begin(), framesB.end());
   const std::set<int> inA(framesA.begin(), framesA.end()), inB(framesB.begin(), framesB.end());
 
-  Plot distance{"largest particle distance", "% of the body's size", {}, namesA, {}};
-  Plot volume{"volume change", "% of the reference's", {}, namesA, {}};
-  Plot contacts{"contacts", "count", {}, {"reference", "new"}, {{}, {}}};
+  Plot distance{"largest particle distance", "% of the body's size", {}, namesA, {}, {}, {}};
+  Plot volume{"volume change", "% of the reference's", {}, namesA, {}, {}, {}};
+  Plot contacts{"contacts", "count", {}, {"reference", "new"}, {{}, {}}, {}, {}};
   distance.series.resize(bodies);
   volume.series.resize(bodies);
   std::vector<double> sizes;

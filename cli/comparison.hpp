@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "cli/svg_plot.hpp"
+
 namespace softbake {
 
 /// Exit statuses of `softbake compare` (its own contract, docs/commands.md).
@@ -23,14 +25,6 @@ struct ComparedItem {
   bool missing = false;              ///< a frame one side lacks
   /// Images of the item in the report, relative to its folder; empty when it has none.
   std::string referenceImage, candidateImage, differenceImage;
-};
-
-/// A line chart over the frames: one series per name.
-struct Plot {
-  std::string title, unit;
-  std::vector<int> frames;
-  std::vector<std::string> names;
-  std::vector<std::vector<double>> series;  ///< per name, a value per frame (NaN: none)
 };
 
 struct Comparison {

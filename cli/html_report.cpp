@@ -1,6 +1,7 @@
 #include "cli/html_report.hpp"
 
 #include "cli/markup.hpp"
+#include "cli/report_page.hpp"
 #include "cli/svg_plot.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
@@ -10,13 +11,6 @@ namespace softbake {
 namespace {
 
 constexpr const char* kStyle = R"(
-body { font-family: sans-serif; margin: 1.5em; color: #222; }
-h1 { font-size: 1.4em; margin-bottom: 0.2em; }
-.headline { font-size: 1.2em; font-weight: bold; padding: 0.4em 0.8em; display: inline-block; }
-.headline.fail, tr.fail td.verdict { background: #f8d0d0; color: #8a0000; }
-.headline.warn, tr.warn td.verdict { background: #fbecc0; color: #6b4e00; }
-.headline.pass, tr.pass td.verdict { background: #d4f0d4; color: #185c18; }
-table.summary td { padding: 0.1em 0.8em 0.1em 0; vertical-align: top; }
 table.items { border-collapse: collapse; margin-top: 1em; }
 table.items th, table.items td { border-top: 1px solid #ccc; padding: 0.4em; text-align: left;
   vertical-align: top; }
@@ -29,12 +23,10 @@ td.numbers div { margin-top: 0.2em; color: #555; }
 .controls { margin-top: 0.3em; font-size: 0.85em; }
 /* One width for every frame: small test frames scaled up, large ones down. */
 img { width: 360px; height: auto; image-rendering: pixelated; }
-#broken { background: #f8d0d0; padding: 0.5em; }
 )";
 
 // The slider moves where the new frame starts over the reference; the toggle shows one whole
-// frame, then the other, as flipping between them shows a change best. Every image marks whether
-// it loaded, and a banner says so when some did not (a report copied without its images).
+// frame, then the other, as flipping between them shows a change best.
 constexpr const char* kScript = R"(
 for (const row of document.querySelectorAll('tr.item')) {
   const pair = row.querySelector('.pair');
@@ -48,20 +40,6 @@ for (const row of document.querySelectorAll('tr.item')) {
     toggle.textContent = showNew ? 'showing new: show reference' : 'showing reference: show new';
     pair.style.setProperty('--split', slider.value + '%');
   });
-}
-const banner = document.getElementById('broken');
-function mark(image, loaded) {
-  image.dataset.state = loaded ? 'loaded' : 'broken';
-  const broken = document.querySelectorAll('img[data-state=broken]').length;
-  banner.hidden = broken === 0;
-  banner.textContent = broken + ' image(s) did not load: keep the report folder whole.';
-}
-for (const image of document.images) {
-  if (image.complete) mark(image, image.naturalWidth > 0);
-  else {
-    image.addEventListener('load', () => mark(image, true));
-    image.addEventListener('error', () => mark(image, false));
-  }
 }
 )";
 
@@ -109,20 +87,16 @@ void writeHtmlReport(const std::filesystem::path& folder, const Comparison& comp
       fails ? cat(fails, " of ", comparison.items.size(), " ", unit, " differ")
             : cat("all ", comparison.items.size(), " ", unit, " within bounds");
   std::string html =
-      cat("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>softbake "
-          "compare: ",
-          escapeMarkup(headline), "</title>\n<style>", kStyle,
-          "</style>\n</head>\n<body>\n<h1>softbake compare: ", escapeMarkup(comparison.kind),
-          "</h1>\n<p class=\"headline ", verdictClass(comparison.worst()), "\" id=\"headline\">",
-          escapeMarkup(headline), warns ? cat(", ", warns, " warn") : std::string(),
-          "</p>\n<p id=\"broken\" hidden></p>\n",
-          "<table class=\"summary\">\n<tr><td>reference</td><td>",
-          escapeMarkup(comparison.reference), "</td></tr>\n<tr><td>new</td><td>",
-          escapeMarkup(comparison.candidate), "</td></tr>\n<tr><td>thresholds</td><td>",
-          escapeMarkup(comparison.thresholds), "</td></tr>\n<tr><td>counts</td><td>", fails,
-          " differ, ", warns, " warn, ", comparison.count(Verdict::Pass), " ok</td></tr>\n");
-  for (const std::string& note : comparison.notes)
-    html += cat("<tr><td>note</td><td>", escapeMarkup(note), "</td></tr>\n");
+      cat(reportPageStart(cat("softbake compare: ", headline), kStyle),
+          "<h1>softbake compare: ", escapeMarkup(comparison.kind), "</h1>\n<p class=\"headline ",
+          verdictClass(comparison.worst()), "\" id=\"headline\">", escapeMarkup(headline),
+          warns ? cat(", ", warns, " warn") : std::string(),
+          "</p>\n<p id=\"broken\" hidden></p>\n<table class=\"summary\">\n",
+          summaryRow("reference", comparison.reference), summaryRow("new", comparison.candidate),
+          summaryRow("thresholds", comparison.thresholds),
+          summaryRow("counts", cat(fails, " differ, ", warns, " warn, ",
+                                   comparison.count(Verdict::Pass), " ok")));
+  for (const std::string& note : comparison.notes) html += summaryRow("note", note);
   html += "</table>\n";
   if (!comparison.plots.empty()) {
     html += "<section id=\"plots\">\n";
@@ -133,7 +107,7 @@ void writeHtmlReport(const std::filesystem::path& folder, const Comparison& comp
       "<table class=\"items\" id=\"items\">\n<thead><tr><th>item</th><th>verdict</th>"
       "<th>numbers</th><th>reference / new</th><th>difference</th></tr></thead>\n<tbody>\n";
   for (const ComparedItem* item : reportOrder(comparison)) html += row(*item);
-  html += cat("</tbody>\n</table>\n<script>", kScript, "</script>\n</body>\n</html>\n");
+  html += cat("</tbody>\n</table>\n", reportPageEnd(kScript));
   makeDirectories(folder);
   writeFileAtomically(folder / "index.html", html);
 }

@@ -234,6 +234,10 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
                    "continue the killed, interrupted or failed run in OUT from its last "
                    "checkpoint, writing only the missing files; the same command and files, or "
                    "an error that says what changed");
+  runApp->add_option("--report", run.report,
+                     "write a bake report into this folder: DIR/index.html, every frame's "
+                     "substeps, contacts, energy, volumes and step time plotted, the frames that "
+                     "look wrong, a flipbook of the PNG frames; also when the run fails");
 
   return runApp;
 }

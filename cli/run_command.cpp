@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -10,7 +11,9 @@
 #include <regex>
 #include <system_error>
 
+#include "cli/bake_report.hpp"
 #include "cli/command_errors.hpp"
+#include "cli/frame_stats.hpp"
 #include "cli/interruption.hpp"
 #include "cli/output_budget.hpp"
 #include "cli/progress_display.hpp"
@@ -199,11 +202,11 @@ struct BakeResult {
 
 /// Simulates frames `firstFrame` + 1 … the last (the simulator starts at `firstFrame`) and hands
 /// the writers every frame the plan asks for; stops early, after a whole frame, when a signal asks
-/// or the simulation fails.
+/// or the simulation fails. With `recorder`, records every frame for the report.
 BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int checkpointEvery,
                 std::optional<std::size_t> cacheSink, FramePipeline& pipeline,
                 ProgressDisplay& progress, const InterruptionGuard& interruption,
-                std::vector<std::uint64_t>& setAsidePairs) {
+                std::vector<std::uint64_t>& setAsidePairs, FrameStatsRecorder* recorder) {
   const SimulationState& state = simulator.state();
   const SimulationSettings& settings = simulator.topology().settings;
   BakeResult result;
@@ -214,17 +217,27 @@ BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int
       break;
     }
     if (frame > firstFrame) {
+      const auto start = std::chrono::steady_clock::now();
       try {
         simulator.advanceToFrame(frame);
       } catch (const Error& error) {
         result.failure = error.what();
         break;
       }
+      const std::chrono::duration<double> stepTime = std::chrono::steady_clock::now() - start;
       const StepStats& stats = simulator.lastFrameStats();
       if (!setAsidePairs.empty()) setAsidePairs[std::size_t(frame - 1)] = stats.setAsidePairs;
       totals.contacts += stats.contacts;
       totals.planeContacts += stats.planeContacts;
       totals.responses += stats.responses;
+      if (recorder) {
+        recorder->record(simulator, frame, stepTime.count());
+        // Saved before the checkpoint is handed to the cache writer: whatever checkpoint a
+        // resumed run finds, the records up to it were saved first.
+        if (isCheckpointFrame(frame, checkpointEvery)) recorder->save();
+      }
+    } else if (recorder && !recorder->has(frame)) {
+      recorder->record(simulator, frame, std::nullopt);
     }
     result.lastFrame = frame;
     const std::uint64_t sinks = plan.sinksPerFrame[std::size_t(frame - 1)];
@@ -338,6 +351,19 @@ int run(const RunOptions& options) {
 
   // Everything above validated the input: only now is anything written.
   makeDirectories(options.out);
+  // The frames' records of an earlier run in this folder belong to another run; a resumed run
+  // continues them.
+  const fs::path frameStatsFile = options.out / "frame_stats.jsonl";
+  if (!options.resume) {
+    std::error_code ignored;
+    fs::remove(frameStatsFile, ignored);
+  }
+  std::optional<FrameStatsRecorder> recorder;
+  if (options.report) {
+    makeDirectories(*options.report);  // a folder that cannot be made fails before the work
+    recorder.emplace(topology, frameStatsFile);
+  }
+  std::vector<std::string> reportNotes;
   Manifest manifest = describeScene(topology, name, frames, scene.output.framePadding);
   manifest.run = record;
   manifest.status = RunStatus::Incomplete;
@@ -397,6 +423,9 @@ int run(const RunOptions& options) {
   const int firstFrame = plan.firstIncompleteFrame > frames
                              ? frames + 1  // nothing is missing: nothing to simulate
                              : restoreForResume(manifest, plan, cache, simulator);
+  if (recorder && firstFrame > 1)
+    if (std::string note = recorder->keepSaved(std::min(firstFrame, frames)); !note.empty())
+      reportNotes.push_back(std::move(note));
   if (simulator.initiallySetAsidePairs() > 0) {
     // A resumed run keeps the counts of the frames it does not simulate again.
     if (options.resume) everything.setAsidePairs = readManifest(options.out).setAsidePairs;
@@ -422,6 +451,57 @@ int run(const RunOptions& options) {
         1;
     writeManifest(options.out, everything);
   };
+  // The report, for as many frames as were simulated, however the run ended.
+  const auto writeReport = [&](const std::string& status, const std::string& failure,
+                               int failedFrame, double seconds) {
+    if (!recorder) return;
+    recorder->save();
+    BakeReport contents;
+    contents.scene = name;
+    contents.input = options.input;
+    contents.out = options.out;
+    contents.frames = frames;
+    contents.fps = topology.settings.fps;
+    contents.integrator = std::string(integratorName(topology.settings.integrator));
+    const SubstepChoice& substeps = simulator.substeps();
+    contents.substeps = substeps.automatic ? "auto" : std::to_string(substeps.substeps);
+    // "auto" of the integrators stable at any step stops at kMaxAutoSubsteps, unless XPBD's own
+    // floor is above it.
+    if (substeps.automatic && substeps.stableAtAnyStep &&
+        !(topology.settings.integrator == IntegratorKind::Xpbd &&
+          substeps.minimumStableSubsteps >= kMaxAutoSubsteps))
+      contents.substepCap = kMaxAutoSubsteps;
+    for (const Body& body : topology.bodies)
+      contents.bodies.push_back({body.name, body.closed, body.restVolume});
+    contents.records = recorder->records();
+    contents.wallSeconds = seconds;
+    contents.status = status;
+    contents.failure = failure;
+    contents.failedFrame = failedFrame;
+    contents.notes = reportNotes;
+    for (const OutputSequence& sequence : everything.sequences)
+      if (sequence.format == "png")
+        for (int frame = 1; frame <= frames; ++frame) {
+          const fs::path png =
+              options.out / sequenceFilePath(sequence, everything.framePadding, frame);
+          std::error_code error;
+          if (fs::is_regular_file(png, error)) contents.pngFrames.emplace_back(frame, png);
+        }
+    writeBakeReport(*options.report, contents);
+    std::printf("report: %s\n", (*options.report / "index.html").string().c_str());
+  };
+  // After a failure, the failure is what the run exits with; a report that cannot be written too
+  // is a warning.
+  const auto writeReportAfterFailure = [&](const std::string& status, const std::string& failure,
+                                           int failedFrame, double seconds) {
+    try {
+      writeReport(status, failure, failedFrame, seconds);
+    } catch (const Error& error) {
+      std::fprintf(stderr, "warning: the report could not be written: %s\n", error.what());
+    } catch (const fs::filesystem_error& error) {
+      std::fprintf(stderr, "warning: the report could not be written: %s\n", error.what());
+    }
+  };
   std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
   ProgressDisplay progress(frames, options.quiet);
   BakeResult result;
@@ -431,7 +511,7 @@ int run(const RunOptions& options) {
     {
       FramePipeline pipeline(std::move(sinks), topology.particleCount());
       result = bake(simulator, firstFrame, plan, checkpointEvery, cacheSink, pipeline, progress,
-                    interruption, everything.setAsidePairs);
+                    interruption, everything.setAsidePairs, recorder ? &*recorder : nullptr);
       pipeline.finish();
       bytesWritten = pipeline.bytesWritten();
     }
@@ -475,6 +555,7 @@ int run(const RunOptions& options) {
     } catch (const Error&) {
       // The first error is the one to report; the manifest stays as it was.
     }
+    writeReportAfterFailure("failed", error.what(), 0, progress.elapsedSeconds());
     throw;
   }
   progress.finish();
@@ -482,11 +563,14 @@ int run(const RunOptions& options) {
 
   if (!result.failure.empty()) {
     recordEnd(RunStatus::Failed, result.failure);
+    writeReportAfterFailure("failed", result.failure, result.lastFrame + 1, seconds);
     throw SimulationFailure(result.failure);
   }
   if (result.stoppedBy != 0) {
-    recordEnd(RunStatus::Incomplete, cat("interrupted by ", signalName(result.stoppedBy),
-                                         " after frame ", result.lastFrame));
+    const std::string reason =
+        cat("interrupted by ", signalName(result.stoppedBy), " after frame ", result.lastFrame);
+    recordEnd(RunStatus::Incomplete, reason);
+    writeReportAfterFailure("interrupted", reason, 0, seconds);
     std::fflush(stdout);
     std::fprintf(stderr,
                  "\nsoftbake: interrupted by %s after frame %d of %d; frames 1 to %d are "
@@ -528,6 +612,7 @@ int run(const RunOptions& options) {
     std::printf("%s sequence: %s\n", sequence.format.c_str(),
                 (options.out / sequence.pattern).string().c_str());
   std::printf("manifest: %s\n", (options.out / "manifest.json").string().c_str());
+  writeReport("complete", "", 0, seconds);
   return 0;
 }
 

@@ -38,6 +38,9 @@ struct RunOptions : SimulationOverrides {
   /// Render each PNG frame as it is simulated, the camera framed on the first frame, instead of
   /// from the cache once the shot is simulated, framed on all of it.
   bool renderWhileSimulating = false;
+  /// Write a bake report into this folder (cli/bake_report.hpp), and the frames' records it is
+  /// made from into OUT/frame_stats.jsonl; also when the run fails or is interrupted.
+  std::optional<std::filesystem::path> report;
   /// The command as typed, quoted for a shell: printed with --resume when a run is interrupted.
   std::string commandLine;
 };

@@ -7,8 +7,8 @@
 ///           "files": [{"path": "/abs/scene.json", "sha256": "…"}, {"path": "/abs/ball.obj", …}],
 ///           "options": {"frames": 48, "fps": null, …, "checkpoint_every": 17}}
 ///
-/// Options left to the scene are null. The thread count, -q and the output budget are not
-/// recorded: they change nothing in the files.
+/// Options left to the scene are null. The thread count, -q, the output budget and --report are
+/// not recorded: they change nothing in the files (a resumed run may add or drop --report).
 
 #include <string>
 #include <vector>

@@ -37,13 +37,19 @@ std::string svgLineChart(const Plot& plot) {
   for (const std::vector<double>& values : plot.series)
     for (const double v : values)
       if (std::isfinite(v)) low = std::min(low, v), high = std::max(high, v);
+  for (const double v : plot.guides)
+    if (std::isfinite(v)) low = std::min(low, v), high = std::max(high, v);
   if (high - low <= 0) high = low + 1;
   const double step = tickStep(high - low, 4);
   low = std::floor(low / step) * step;
   high = std::ceil(high / step) * step;
   const int first = plot.frames.empty() ? 1 : plot.frames.front();
-  const int last = plot.frames.empty() ? 1 : std::max(plot.frames.back(), first + 1);
-  const auto x = [&](int frame) { return left + plotWidth * (frame - first) / (last - first); };
+  int last = plot.frames.empty() ? 1 : plot.frames.back();
+  for (const int frame : plot.marks) last = std::max(last, frame);
+  last = std::max(last, first + 1);
+  const auto x = [&](double frame) {
+    return left + plotWidth * (frame - first) / double(last - first);
+  };
   const auto y = [&](double v) { return top + plotHeight * (high - v) / (high - low); };
 
   std::string svg = cat("<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" width=\"", width,
@@ -56,6 +62,19 @@ std::string svgLineChart(const Plot& plot) {
     svg += cat("<line x1=\"", left, "\" x2=\"", left + plotWidth, "\" y1=\"", y(v), "\" y2=\"",
                y(v), "\" stroke=\"#ddd\"/><text x=\"", left - 6, "\" y=\"", y(v) + 4,
                "\" text-anchor=\"end\">", number(std::abs(v) < step / 1e6 ? 0 : v), "</text>\n");
+  // Half a frame each side, so that a single marked frame stays visible on a long run.
+  const double halfFrame = std::max(0.5, (last - first) / plotWidth);
+  for (const int frame : plot.marks) {
+    const double from = x(std::max<double>(first, frame - halfFrame)),
+                 to = x(std::min<double>(last, frame + halfFrame));
+    svg += cat("<rect class=\"mark\" x=\"", number(from), "\" y=\"", top, "\" width=\"",
+               number(to - from), "\" height=\"", plotHeight, "\" fill=\"#f4a0a0\"/>\n");
+  }
+  for (const double v : plot.guides)
+    if (std::isfinite(v))
+      svg += cat("<line class=\"guide\" x1=\"", left, "\" x2=\"", left + plotWidth, "\" y1=\"",
+                 number(y(v)), "\" y2=\"", number(y(v)),
+                 "\" stroke=\"#b00\" stroke-dasharray=\"4 3\"/>\n");
   const double frameStep = std::max(1.0, tickStep(last - first, 6));
   for (double f = first; f <= last; f += frameStep)
     svg += cat("<text x=\"", x(int(f)), "\" y=\"", top + plotHeight + 16,

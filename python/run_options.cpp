@@ -73,6 +73,14 @@ struct Reader {
     return value.cast<std::string>();
   }
 
+  /// A path: str, bytes or os.PathLike, as the file system's text.
+  std::string path() const {
+    if (!PyUnicode_Check(value.ptr()) && !PyBytes_Check(value.ptr()) &&
+        !py::hasattr(value, "__fspath__"))
+      wrongType("a path (str or os.PathLike)");
+    return py::module_::import("os").attr("fsdecode")(value).cast<std::string>();
+  }
+
   std::string choice(const std::vector<std::string>& names) const {
     const std::string name = text();
     if (std::find(names.begin(), names.end(), name) == names.end())
@@ -245,6 +253,10 @@ const std::map<std::string, Keyword>& keywords() {
                                                &RunOptions::checkpointEvery));
     k.emplace("cache_only", flagKeyword(S::Run, "--cache-only", &RunOptions::cacheOnly));
     k.emplace("resume", flagKeyword(S::Run, "--resume", &RunOptions::resume));
+    k.emplace("report", Keyword{S::Run, [](const Reader& r, RunOptions& o, auto& flags) {
+                                  o.report = r.path();
+                                  flags.insert(flags.end(), {"--report", o.report->string()});
+                                }});
     return k;
   }();
   return table;

@@ -437,8 +437,9 @@ options: the flags of `softbake run`, named without their dashes and with '_' fo
   no_response, no_pair_cache, frame_padding, contacts, render (True: --render, False:
   --no-render, None: the scene's choice), size ('1280x720' or (1280, 720)), no_contact_spheres,
   contacts_view ('xray' or 'opaque'), render_while_simulating, vdb, voxel_size, vdb_fog,
-  vdb_compression, up, pc2, mdd, threads, quiet, max_output_gib, no_cache, checkpoint_every, cache_only, resume, accept_lossy_import,
-  max_vertices, max_faces, max_import_memory, max_import_seconds, max_bodies.
+  vdb_compression, up, pc2, mdd, threads, quiet, max_output_gib, no_cache, checkpoint_every, cache_only, resume,
+  report (a folder: the bake report), accept_lossy_import, max_vertices, max_faces,
+  max_import_memory, max_import_seconds, max_bodies.
 
 Returns the command's exit code: 0, or 130/143 when SIGINT/SIGTERM stopped it after a frame (the
 run can be continued with resume=True). Raises softbake.Error with the command's message when it

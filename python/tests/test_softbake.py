@@ -212,6 +212,19 @@ def test_run_options(tmp_path):
     assert not (tmp_path / "b").exists()  # refused before anything was written
 
 
+def test_run_writes_the_bake_report(tmp_path):
+    """report= is --report: the report's page, and a record per frame in the output folder."""
+    assert softbake.run("default", out=tmp_path / "out", frames=3, render=False, quiet=True,
+                        report=tmp_path / "report") == 0
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "softbake bake report: default" in page
+    records = [json.loads(line) for line in
+               (tmp_path / "out" / "frame_stats.jsonl").read_text().splitlines()]
+    assert [r["frame"] for r in records] == [1, 2, 3]
+    with pytest.raises(TypeError, match="report: expected a path"):
+        softbake.run("default", out=tmp_path / "b", report=3)
+
+
 def test_run_takes_every_flag_of_the_command(tmp_path):
     """Each flag `softbake run --help` lists is a keyword of run() (--no-render is render=False)."""
     flags = re.findall(r"^\s+(?:-\w,)?--([a-z][a-z0-9-]*)", cli("run", "--help").stdout, re.M)

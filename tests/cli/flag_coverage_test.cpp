@@ -67,6 +67,7 @@ constexpr FlagTest kFlagTests[] = {
     {"run", "--checkpoint-every", "Resume.AFullDiskNamesTheFileLeavesNoTornFileAndResumes"},
     {"run", "--cache-only", "CliTest.FarmScriptsHoldTheirDirectivesWhereSbatchReadsThem"},
     {"run", "--resume", "Resume.AFullDiskNamesTheFileLeavesNoTornFileAndResumes"},
+    {"run", "--report", "BakeReport.ARunRecordsEveryFrameWithTheVolumesAndEnergyItsObjAndCacheFramesGive"},
     {"compare", "--metric", "CompareCommand.EachMetricHasItsFailAndWarnThresholds"},
     {"compare", "--fail", "CompareCommand.EachMetricHasItsFailAndWarnThresholds"},
     {"compare", "--fail-percent", "CompareCommand.EachMetricHasItsFailAndWarnThresholds"},

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Checks what `softbake compare` writes for CI, as CI's tools and a person's browser read it.
+"""Checks what `softbake compare` writes for CI, and the report of `softbake run --report`, as
+CI's tools and a person's browser read them.
 
   check_report.py junit FILE TESTS FAILURES
       FILE parses as XML (Python's xml.etree), is JUnit's <testsuites>/<testsuite>/<testcase>, and
@@ -11,6 +12,11 @@
       and a proxy that goes nowhere), and dumps the DOM its script leaves: one row per item, ROWS of
       them, failures first, then warnings, then passes; every <img> loaded. The page names no
       address on the network. Then a screenshot of the page goes to SCREENSHOT.
+  check_report.py bake FOLDER FRAMES SCREENSHOT
+      The same for the bake report of `softbake run --report`: chromium opens it offline and its
+      DOM shows the script ran, the flipbook's slider spans FRAMES frames, the frame's numbers
+      are beside it, five plots are drawn, and every <img> loaded (the flipbook's frame, when the
+      run rendered PNG frames). No network address; a screenshot.
 
 Exit 0 when all holds; otherwise 1 with each problem on a line. Python's standard library only.
 """
@@ -79,15 +85,72 @@ def chromium(arguments):
     return result.stdout
 
 
-def check_browser(folder, rows, screenshot):
-    page = os.path.abspath(os.path.join(folder, "index.html"))
-    problems = []
+class BakeReportDom(html.parser.HTMLParser):
+    """What the bake report's script left: the flipbook, its numbers, the plots, the images."""
+
+    def __init__(self):
+        super().__init__()
+        self.ready, self.slider_max, self.numbers, self.plots, self.images = None, None, 0, 0, []
+        self.in_numbers = False
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "body":
+            self.ready = attrs.get("data-ready")
+        if tag == "input" and attrs.get("id") == "flip-slider":
+            self.slider_max = attrs.get("max")
+        if tag == "table" and attrs.get("id") == "flip-numbers":
+            self.in_numbers = True
+        if tag == "tr" and self.in_numbers:
+            self.numbers += 1
+        if tag == "figure" and "plot" in (attrs.get("class") or "").split():
+            self.plots += 1
+        if tag == "img":
+            self.images.append((attrs.get("src"), attrs.get("data-state")))
+
+    def handle_endtag(self, tag):
+        if tag == "table":
+            self.in_numbers = False
+
+
+def network_addresses(page):
+    """Problems: addresses on the network `page` names. The SVG namespace is a name, not a
+    request."""
     text = open(page, encoding="utf-8").read()
-    # The SVG namespace is a name, not a request.
     addresses = [a for a in re.findall(r"(?:https?|ftp)://[^\s\"'<>)]+", text)
                  if a != "http://www.w3.org/2000/svg"]
-    if addresses:
-        problems.append(f"{page} names addresses on the network: {addresses[:3]}")
+    return [f"{page} names addresses on the network: {addresses[:3]}"] if addresses else []
+
+
+def screenshot_problems(page, screenshot):
+    os.makedirs(os.path.dirname(os.path.abspath(screenshot)), exist_ok=True)
+    chromium([f"--screenshot={os.path.abspath(screenshot)}", "--window-size=1280,1600",
+              "file://" + page])
+    return [] if os.path.getsize(screenshot) else [f"{screenshot}: empty screenshot"]
+
+
+def check_bake(folder, frames, screenshot):
+    page = os.path.abspath(os.path.join(folder, "index.html"))
+    problems = network_addresses(page)
+    dom = BakeReportDom()
+    dom.feed(chromium(["--dump-dom", "file://" + page]))
+    if dom.ready != "true":
+        problems.append("the page's script did not run to its end (no data-ready on <body>)")
+    if dom.slider_max != str(frames - 1):
+        problems.append(f"the flipbook's slider ends at {dom.slider_max}, expected {frames - 1}")
+    if dom.numbers < 6:
+        problems.append(f"{dom.numbers} rows of numbers beside the flipbook, expected 6 or more")
+    if dom.plots != 5:
+        problems.append(f"{dom.plots} plots, expected 5")
+    for source, state in dom.images:
+        if state != "loaded":
+            problems.append(f"image {source} did not load (data-state={state})")
+    return problems + screenshot_problems(page, screenshot)
+
+
+def check_browser(folder, rows, screenshot):
+    page = os.path.abspath(os.path.join(folder, "index.html"))
+    problems = network_addresses(page)
     dom = ReportDom()
     dom.feed(chromium(["--dump-dom", "file://" + page]))
     if len(dom.rows) != rows:
@@ -101,12 +164,7 @@ def check_browser(folder, rows, screenshot):
     for source, state in dom.images:
         if state != "loaded":
             problems.append(f"image {source} did not load (data-state={state})")
-    os.makedirs(os.path.dirname(os.path.abspath(screenshot)), exist_ok=True)
-    chromium([f"--screenshot={os.path.abspath(screenshot)}", "--window-size=1280,1600",
-              "file://" + page])
-    if not os.path.getsize(screenshot):
-        problems.append(f"{screenshot}: empty screenshot")
-    return problems
+    return problems + screenshot_problems(page, screenshot)
 
 
 def main():
@@ -114,6 +172,8 @@ def main():
         problems = check_junit(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]))
     elif len(sys.argv) == 5 and sys.argv[1] == "browser":
         problems = check_browser(sys.argv[2], int(sys.argv[3]), sys.argv[4])
+    elif len(sys.argv) == 5 and sys.argv[1] == "bake":
+        problems = check_bake(sys.argv[2], int(sys.argv[3]), sys.argv[4])
     else:
         sys.exit(__doc__)
     for problem in problems:
