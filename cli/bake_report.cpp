@@ -9,6 +9,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <regex>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -105,7 +106,7 @@ function show(index) {
     const v = f.volumes[b];
     const fraction = v === null || !(body.rest_volume > 0) ? null : v / body.rest_volume;
     row('volume ' + body.name, fraction === null ? 'open' : text(100 * fraction) + '% of rest',
-        fraction !== null && Math.abs(fraction - 1) > data.volume_limit);
+        fraction !== null && body.keeps_volume && Math.abs(fraction - 1) > data.volume_limit);
   });
   for (const problem of f.problems) row('flagged', problem, true);
 }
@@ -174,7 +175,7 @@ std::vector<FrameFlags> flagFrames(const BakeReport& report) {
     std::size_t beyond = 0;
     for (std::size_t b = 0; b < report.bodies.size(); ++b) {
       const double fraction = volumeFraction(report, r, b);
-      if (!(std::abs(fraction - 1) > kReportVolumeLimit)) continue;
+      if (!report.bodies[b].keepsVolume || !(std::abs(fraction - 1) > kReportVolumeLimit)) continue;
       if (++beyond <= 3)
         f.problems.push_back(cat("volume of '", report.bodies[b].name, "' ",
                                  signedPercent(fraction - 1), " from rest"));
@@ -446,8 +447,10 @@ void writeBakeReport(const fs::path& folder, const BakeReport& report) {
                                                  frameRanges(flaggedFrames), " (listed below)"));
   html += summaryRow(
       "flagged when",
-      cat("a closed body's volume is more than ", 100 * kReportVolumeLimit,
-          "% from its rest volume; the total energy (kinetic, elastic, gravity's), which nothing "
+      cat("the volume of a closed body with a bulk modulus is more than ", 100 * kReportVolumeLimit,
+          "% from its rest volume (under the gas law alone, bulk_modulus 0, volume follows the "
+          "load by design: plotted, not flagged); the total energy (kinetic, elastic, gravity's), "
+          "which nothing "
           "in a scene adds, rises in a frame by more than ",
           100 * kReportEnergyRise, "% of the largest kinetic and elastic energy up to it; ",
           report.substepCap ? cat("\"auto\" substeps reach their cap of ", *report.substepCap)
@@ -458,16 +461,38 @@ void writeBakeReport(const fs::path& folder, const BakeReport& report) {
   // Where it went wrong, frame by frame.
   if (report.failedFrame > 0 || !flaggedFrames.empty()) {
     html += "<h2>Flagged frames</h2>\n<table class=\"list\" id=\"flagged\">\n";
-    std::size_t listed = 0;
-    for (std::size_t i = 0; i < records.size() && listed < kListedFrames; ++i) {
+    // Consecutive frames flagged for the same things are one row, the first of them shown: a
+    // body that stays squashed for 90 frames is one finding, not 90.
+    const auto alike = [&](std::size_t a, std::size_t b) {
+      static const std::regex numbers("[-+]?[0-9][0-9.e+-]*");
+      if (records[b].frame != records[a].frame + 1) return false;
+      if (flags[a].problems.size() != flags[b].problems.size()) return false;
+      for (std::size_t k = 0; k < flags[a].problems.size(); ++k)
+        if (std::regex_replace(flags[a].problems[k], numbers, "#") !=
+            std::regex_replace(flags[b].problems[k], numbers, "#"))
+          return false;
+      return true;
+    };
+    std::size_t listed = 0, rows = 0;
+    for (std::size_t i = 0; i < records.size() && rows < kListedFrames; ++i) {
       if (!flags[i].any()) continue;
-      ++listed;
+      std::size_t last = i;
+      while (last + 1 < records.size() && flags[last + 1].any() && alike(last, last + 1)) ++last;
+      ++rows;
+      listed += last - i + 1;
       std::string problems;
       for (const std::string& p : flags[i].problems)
         problems += cat(problems.empty() ? "" : "; ", p);
+      if (last > i)
+        problems +=
+            cat(" (at frame ", records[i].frame, "; frames to ", records[last].frame, " alike)");
+      const std::string frames = last > i
+                                     ? cat("frames ", records[i].frame, "–", records[last].frame)
+                                     : cat("frame ", records[i].frame);
       html += cat("<tr class=\"flagged\" data-frame=\"", records[i].frame,
-                  "\"><td><a href=\"#flipbook\" data-index=\"", i, "\">frame ", records[i].frame,
+                  "\"><td><a href=\"#flipbook\" data-index=\"", i, "\">", frames,
                   "</a></td><td class=\"bad\">", escapeMarkup(problems), "</td></tr>\n");
+      i = last;
     }
     if (flaggedFrames.size() > listed)
       html +=
@@ -592,7 +617,7 @@ void writeBakeReport(const fs::path& folder, const BakeReport& report) {
   for (const BodyChange& c : changes) {
     if (listedBodies++ == kListedBodies) break;
     const BakeReportBody& body = report.bodies[c.body];
-    const bool bad = std::abs(c.worst) > kReportVolumeLimit;
+    const bool bad = body.keepsVolume && std::abs(c.worst) > kReportVolumeLimit;
     html += cat("<tr class=\"body\" data-body=\"", escapeMarkup(body.name), "\"><td>",
                 escapeMarkup(body.name), "</td>");
     if (!std::isfinite(c.worst))
@@ -618,7 +643,8 @@ void writeBakeReport(const fs::path& folder, const BakeReport& report) {
   for (const std::size_t b : plotted)
     bodies.push_back({{"name", report.bodies[b].name},
                       {"index", b},
-                      {"rest_volume", report.bodies[b].restVolume}});
+                      {"rest_volume", report.bodies[b].restVolume},
+                      {"keeps_volume", report.bodies[b].keepsVolume}});
   data["bodies"] = std::move(bodies);
   Json frameData = Json::array();
   for (std::size_t i = 0; i < records.size(); ++i) {

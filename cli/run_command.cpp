@@ -472,7 +472,8 @@ int run(const RunOptions& options) {
           substeps.minimumStableSubsteps >= kMaxAutoSubsteps))
       contents.substepCap = kMaxAutoSubsteps;
     for (const Body& body : topology.bodies)
-      contents.bodies.push_back({body.name, body.closed, body.restVolume});
+      contents.bodies.push_back(
+          {body.name, body.closed, body.restVolume, body.material.bulkModulus > 0});
     contents.records = recorder->records();
     contents.wallSeconds = seconds;
     contents.status = status;

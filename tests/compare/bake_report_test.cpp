@@ -360,4 +360,39 @@ TEST_F(BakeReport, TheReportOpensOfflineInChromiumWithItsFlipbookAndPlots) {
 }
 
 }  // namespace
+
+/// A balloon follows the gas law by design (bulk_modulus 0): it stays 40% above its rest volume
+/// and is plotted, not flagged. A rubber ball pumped to 20 kPa keeps its bulk modulus and stays
+/// 34% above rest: flagged on every frame, in one row for the frames flagged alike.
+TEST_F(BakeReport, OnlyBodiesThatKeepTheirVolumeAreFlaggedAndAlikeFramesShareARow) {
+  const fs::path scene = writeScene("inflated.json", R"({"settings": {"frames": 12}, "bodies": [
+    {"name": "balloon", "mesh": {"primitive": "icosphere"}, "transform": {"translate": [-0.7, 1, 0]},
+     "material": "balloon"},
+    {"name": "pumped", "mesh": {"primitive": "icosphere"}, "transform": {"translate": [0.7, 1, 0]},
+     "material": {"preset": "rubber", "pressure": 20000}}],
+    "colliders": [{"type": "plane", "name": "ground"}]})");
+  const fs::path out = folder_ / "out", report = folder_ / "report";
+  const test::Result run = runSoftbake("run " + quoted(scene) + " --no-render -q --out " +
+                                       quoted(out) + " --report " + quoted(report));
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const std::string html = readFile(report / "index.html");
+  const Json data = reportData(html);
+  ASSERT_EQ(data["frames"].size(), 12u);
+  for (std::size_t f = 1; f < 12; ++f) {
+    const Json& frame = data["frames"][f];
+    EXPECT_GT(frame["volumes"][0].get<double>(),
+              1.1 * data["bodies"][0]["rest_volume"].get<double>())
+        << "the balloon inflates, frame " << f + 1;
+    ASSERT_EQ(frame["problems"].size(), 1u) << frame.dump();
+    EXPECT_NE(frame["problems"][0].get<std::string>().find("'pumped'"), std::string::npos);
+  }
+  const std::string flagged = element(html, "flagged", "table");
+  std::size_t rows = 0;
+  for (std::size_t at = flagged.find("<tr class=\"flagged\""); at != std::string::npos;
+       at = flagged.find("<tr class=\"flagged\"", at + 1))
+    ++rows;
+  EXPECT_EQ(rows, 1u) << flagged;
+  EXPECT_NE(flagged.find("frames 2–12"), std::string::npos) << flagged;
+}
+
 }  // namespace softbake
