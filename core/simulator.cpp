@@ -15,6 +15,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     : topology_(std::move(topology)),
       state_(std::move(state)),
       forces_(*topology_),
+      stepper_(makeStepper(*topology_)),
       substepStart_(state_.position),
       substeps_(chooseSubsteps(*topology_, topology_->settings.substeps)),
       detector_(topology_->settings.collisions),
@@ -61,13 +62,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   }
   detector_.setAside(initiallySetAside_);
   detector_.setFitted(initialOverlaps_.close);
-  const IntegratorKind integrator = topology_->settings.integrator;
-  if (integrator == IntegratorKind::Implicit) {
-    implicit_.emplace(*topology_);
-    holds_.emplace(*topology_);
-  }
-  if (integrator == IntegratorKind::Xpbd) xpbd_.emplace(*topology_);
-  if (integrator != IntegratorKind::Explicit) {
+  if (stepper_->stableAtAnyStep()) {
     contactEdgeLength_ = contactEdgeLength(*topology_);
     substeps_.stableAtAnyStep = true;
     if (substeps_.automatic) chooseContactAccuracySubsteps();
@@ -78,10 +73,8 @@ void Simulator::chooseContactAccuracySubsteps() {
   const ContactAccuracy accuracy = contactAccuracySubsteps(
       *topology_, state_.position, state_.velocity, detector_.candidatePairs(), contactEdgeLength_,
       contactAccuracyScratch_);
-  substeps_.substeps = accuracy.substeps;
+  substeps_.substeps = std::max(accuracy.substeps, stepper_->fewestAutoSubsteps(substeps_));
   substeps_.closingSpeed = accuracy.closingSpeed;
-  // XPBD's springs soften at steps past the explicit bound (core/dynamics/xpbd.hpp).
-  if (xpbd_) substeps_.substeps = std::max(substeps_.substeps, substeps_.minimumStableSubsteps);
   substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;
 }
 
@@ -95,40 +88,9 @@ void Simulator::step(int frame) {
   const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
   ++stepsTaken_;
-  // XPBD solves springs and gas within its step, from positions it moves as it goes.
-  if (!xpbd_) {
-    // The implicit step computes its springs' forces with their Jacobians, in one pass.
-    if (!implicit_) computeSpringForces(topology, state_, forces_);
-    computeVolumes(topology, state_, forces_);
-    computePressureForces(topology, state_, forces_);
-    clock.lap(Stage::Forces);
-  }
+  if (stepper_->computeForces(topology, state_, forces_)) clock.lap(Stage::Forces);
   const Scalar dt = Scalar(substeps_.timeStep);
-  bool finite = false;
-  if (implicit_) {
-    holds_->holdFor(*implicit_, state_, dt, true);
-    if (!topology.planes.empty()) velocityStart_ = state_.velocity;
-    finite = implicit_->step(topology, forces_, dt, state_, substepStart_);
-    // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is held.
-    std::size_t changedHolds = 0;
-    if (finite && !topology.planes.empty() &&
-        topology.settings.collisions.response != ResponseMode::None) {
-      changedHolds = holds_->catchImpacts(state_);  // first: a hold let go is not caught again
-      changedHolds += holds_->dropWrongExpectations(*implicit_);
-    }
-    if (changedHolds > 0) {
-      // Again from the start, with the particles that met a plane held and those wrongly expected
-      // to let go (contact_holds.hpp).
-      std::copy(substepStart_.begin(), substepStart_.end(), state_.position.begin());
-      std::copy(velocityStart_.begin(), velocityStart_.end(), state_.velocity.begin());
-      holds_->holdFor(*implicit_, state_, dt, false);
-      finite = implicit_->stepAgain(topology, dt, state_, substepStart_);
-    }
-  } else {
-    finite = xpbd_ ? xpbd_->step(topology, forces_, dt, state_, substepStart_)
-                   : integrate(topology, forces_, dt, state_, substepStart_);
-  }
-  if (!finite) reportBlowUp(frame);
+  if (!stepper_->step(topology, forces_, dt, state_, substepStart_)) reportBlowUp(frame);
   clock.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
@@ -145,15 +107,14 @@ void Simulator::step(int frame) {
     stats_.contacts += contacts_.size();
     stats_.responses += responses;
   }
-  stats_.planeContacts +=
-      resolvePlaneContacts(topology, substepStart_, state_, response != ResponseMode::None,
-                           holds_ ? holds_->touchedPlane() : std::span<std::int32_t>());
+  stats_.planeContacts += resolvePlaneContacts(
+      topology, substepStart_, state_, response != ResponseMode::None, stepper_->planeHolds());
   clock.lap(Stage::Planes);
   if (failsafe_) {
     stats_.failsafe += failsafe_->apply(topology, detector_, substepStart_, state_, dt);
     clock.lap(Stage::Failsafe);
   }
-  if (holds_) stats_.planeContacts += holds_->update(*implicit_);
+  stats_.planeContacts += stepper_->endStep();
 }
 
 void Simulator::beginFrame() {
@@ -214,11 +175,7 @@ void Simulator::endFrame() {
 SimulationCheckpoint Simulator::checkpoint() const {
   SimulationCheckpoint checkpoint;
   checkpoint.state = state_;
-  if (implicit_) {
-    checkpoint.warmStart.assign(implicit_->warmStart().begin(), implicit_->warmStart().end());
-    const std::span<const std::int32_t> holds = holds_->touchedPlane();
-    checkpoint.planeHolds.assign(holds.begin(), holds.end());
-  }
+  stepper_->save(checkpoint.warmStart, checkpoint.planeHolds);
   checkpoint.touchingPairs = detector_.candidatePairs();
   checkpoint.tangled = (failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any());
   checkpoint.stepsTaken = stepsTaken_;
@@ -227,10 +184,8 @@ SimulationCheckpoint Simulator::checkpoint() const {
 
 void Simulator::restore(const SimulationCheckpoint& checkpoint) {
   const std::size_t n = topology_->particleCount();
-  const bool planeHolds = implicit_ && !topology_->planes.empty();
   if (checkpoint.state.position.size() != n || checkpoint.state.velocity.size() != n ||
-      checkpoint.warmStart.size() != (implicit_ ? n : 0) ||
-      checkpoint.planeHolds.size() != (planeHolds ? n : 0))
+      !stepper_->fits(checkpoint.warmStart.size(), checkpoint.planeHolds.size(), n))
     throw Error(cat("a checkpoint of ", checkpoint.state.position.size(), " particles",
                     checkpoint.warmStart.empty() ? "" : " from the implicit integrator",
                     " does not fit this scene of ", n, " particles under the ",
@@ -240,11 +195,7 @@ void Simulator::restore(const SimulationCheckpoint& checkpoint) {
       throw Error(cat("a checkpoint names triangle ", pair.second, " of a scene of ",
                       topology_->collision.triangleVertices.size(), " collision triangles"));
   state_ = checkpoint.state;
-  if (implicit_) {
-    implicit_->setWarmStart(checkpoint.warmStart);
-    std::copy(checkpoint.planeHolds.begin(), checkpoint.planeHolds.end(),
-              holds_->touchedPlane().begin());
-  }
+  stepper_->restore(checkpoint.warmStart, checkpoint.planeHolds);
   detector_.restoreCandidatePairs(checkpoint.touchingPairs);
   // The next frame names the tangled surfaces again from the positions whenever any were left
   // (beginFrame), so whether any were is all that carries over.

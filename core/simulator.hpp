@@ -6,7 +6,8 @@
 ///   response) → planes → failsafe
 ///
 /// The integrator is the paper's explicit Euler (§1.2), backward Euler or XPBD
-/// (settings.integrator); the collision stages after it are the same for all three.
+/// (settings.integrator), behind one interface (core/dynamics/stepper.hpp); the collision stages
+/// after it are the same for all three.
 ///
 /// The integrator keeps where each particle started the substep, and the collision stage sees
 /// each particle's segment from there to its new position, which is what the line–triangle tests
@@ -25,11 +26,9 @@
 #include "core/collision/failsafe.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
-#include "core/dynamics/contact_holds.hpp"
 #include "core/dynamics/forces.hpp"
-#include "core/dynamics/implicit_euler.hpp"
 #include "core/dynamics/stability.hpp"
-#include "core/dynamics/xpbd.hpp"
+#include "core/dynamics/stepper.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 #include "core/stage_timer.hpp"
@@ -65,9 +64,7 @@ class Simulator {
   /// The force stage's latest results (volumes and pressures per body among them).
   const ForceBuffers& forces() const { return forces_; }
   /// The implicit integrator's latest solve; empty under the explicit one.
-  std::optional<ImplicitSolveStats> lastSolve() const {
-    return implicit_ ? std::optional(implicit_->lastSolve()) : std::nullopt;
-  }
+  std::optional<ImplicitSolveStats> lastSolve() const { return stepper_->lastSolve(); }
   /// The substeps of the latest frame ("auto" under the implicit and XPBD integrators re-chooses
   /// them per frame).
   const SubstepChoice& substeps() const { return substeps_; }
@@ -131,11 +128,9 @@ class Simulator {
   std::shared_ptr<const SceneTopology> topology_;
   SimulationState state_;
   ForceBuffers forces_;
-  std::vector<Vec3> substepStart_;   ///< every particle's position at the start of the substep
-  std::vector<Vec3> velocityStart_;  ///< and its velocity, to take an implicit step again
-  std::optional<ImplicitEuler> implicit_;  ///< set under the implicit integrator
-  std::optional<Xpbd> xpbd_;               ///< set under the XPBD integrator
-  double contactEdgeLength_ = 0;  ///< for "auto" substeps of the integrators stable at any step
+  std::unique_ptr<Stepper> stepper_;  ///< settings.integrator
+  std::vector<Vec3> substepStart_;    ///< every particle's position at the start of the substep
+  double contactEdgeLength_ = 0;      ///< for "auto" substeps of the integrators stable at any step
   SubstepChoice substeps_;
   ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;
@@ -152,9 +147,6 @@ class Simulator {
   std::vector<TrianglePair> initiallyFitted_;
   std::vector<Contact> contacts_;
   EdgePushes edgePushes_;
-  /// Contacts the next implicit step holds. Like the implicit integrator's warm start, they carry
-  /// over from one substep to the next.
-  std::optional<ContactHolds> holds_;
   bool collides_ = false;
   std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;
