@@ -62,7 +62,9 @@ void FramePipeline::throwIfFailed() const {
 
 Frame& FramePipeline::acquire() {
   std::unique_lock lock(mutex_);
-  freed_.wait(lock, [&] { return !freeSlots_.empty() || !failure_.empty() || finishing_; });
+  const auto ready = [&] { return !freeSlots_.empty() || !failure_.empty() || finishing_; };
+  if (!ready()) ++acquireWaits_;
+  freed_.wait(lock, ready);
   throwIfFailed();
   const std::size_t slot = freeSlots_.back();
   freeSlots_.pop_back();

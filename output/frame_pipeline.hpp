@@ -54,6 +54,9 @@ class FramePipeline {
   std::uint64_t framesWritten(std::size_t index) const;
   /// Bytes all sinks have written so far. Safe to call from any thread.
   std::uint64_t bytesWritten() const;
+  /// Calls of acquire() that found every buffer out and had to wait for a sink. Safe to call from
+  /// any thread: how a test knows the producer is held back without waiting for it a while.
+  std::uint64_t acquireWaits() const { return acquireWaits_; }
 
  private:
   enum class SlotState { Free, Filling, Queued };
@@ -74,6 +77,7 @@ class FramePipeline {
   std::vector<Frame> frames_;  ///< the pool; never resized after construction
   std::size_t particleCount_;
   std::vector<std::unique_ptr<Worker>> workers_;
+  std::atomic<std::uint64_t> acquireWaits_{0};
 
   std::mutex mutex_;
   std::condition_variable queued_;  ///< sinks wait here for frames (or for the end)

@@ -305,67 +305,102 @@ def test_positions_are_a_view_of_the_state():
         first[0, 0] = 1  # read-only: the simulator owns it
 
 
+def _refusal(call):
+    """The message of the ValueError `call` raised; None when it went through."""
+    try:
+        call()
+    except ValueError as error:
+        return str(error)
+    return None
+
+
+def _on_seeing_advance_run(simulation, act, stop):
+    """A thread that calls act(refusal) once it sees advance() run on `simulation`, from a call
+    that refuses to overlap it, or ends when `stop` is set. That it sees it at all is the proof
+    that the GIL was let go: held, it would let this thread in only between two advance() calls,
+    when the Simulation is not busy."""
+    def watch():
+        while not stop.is_set():
+            refusal = _refusal(simulation.contacts)
+            if refusal is not None:
+                act(refusal)
+                return
+
+    thread = threading.Thread(target=watch)
+    thread.start()
+    return thread
+
+
 def test_advance_releases_the_gil():
     """A Python thread keeps running while advance() simulates."""
     simulation = softbake.Simulation("balls10k")
-    simulation.advance(1)
-    start = time.perf_counter()
-    simulation.advance(2)
-    per_frame = (time.perf_counter() - start) / 2
-    frames = min(40, max(2, round(0.8 / per_frame)))  # about a second of simulation
-
-    ticks, stop = [], threading.Event()
-
-    def tick():
-        while not stop.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.001)
-
-    ticker = threading.Thread(target=tick)
-    ticker.start()
-    time.sleep(0.05)
-    begin = time.perf_counter()
-    simulation.advance(frames)
-    end = time.perf_counter()
-    stop.set()
-    ticker.join()
-    assert end - begin > 0.3, f"advance({frames}) took {end - begin:.3f} s; too short to tell"
-    # Held, the GIL would let no tick in while advance() runs, apart from a switch at its ends.
-    inside = [t for t in ticks if begin + 0.05 < t < end - 0.05]
-    assert len(inside) > 10, f"{len(inside)} ticks in {end - begin:.2f} s of advance({frames})"
+    refusals, stop = [], threading.Event()
+    watcher = _on_seeing_advance_run(simulation, refusals.append, stop)
+    frames = 0
+    try:
+        # A frame at a time, a count and not a time bounding it: the watcher gets its chance
+        # in each, and a held GIL fails the test instead of hanging it.
+        while watcher.is_alive() and frames < 50:
+            simulation.advance(1)
+            frames += 1
+    finally:
+        stop.set()
+        watcher.join()
+    assert refusals, f"no other thread ran during {frames} frames of advance()"
+    assert refusals[0] == "contacts(): advance() is running on this Simulation in another thread"
 
 
 def test_advance_from_two_threads_is_refused():
+    """While advance() runs, the calls of another thread that would overlap it are refused and
+    change nothing."""
     simulation = softbake.Simulation("balls10k")
-    refused, started = [], threading.Event()
+    refused, advanced, stop = {}, {"main": 0, "other": 0}, threading.Event()
 
-    def advance():
-        started.set()
-        simulation.advance(6)
+    def other():
+        while len(refused) < 2 and not stop.is_set():
+            refusal = _refusal(simulation.contacts)
+            if refusal is None:
+                continue
+            refused.setdefault("contacts", refusal)
+            # The advance() seen keeps the Simulation until it has the GIL back, and this thread
+            # keeps the GIL from that call to this one unless Python switches threads in between:
+            # then this one runs, a frame of its own.
+            refusal = _refusal(lambda: simulation.advance(1))
+            if refusal is None:
+                advanced["other"] += 1
+            else:
+                refused.setdefault("advance", refusal)
 
-    thread = threading.Thread(target=advance)
+    thread = threading.Thread(target=other)
     thread.start()
-    started.wait()
-    time.sleep(0.1)
-    for call in (lambda: simulation.advance(1), simulation.contacts):
-        try:
-            call()
-        except ValueError as error:
-            refused.append(str(error))
-    thread.join()
-    # Six frames of balls10k take far longer than 0.1 s: both calls came while it ran.
-    assert simulation.frame == 7, refused
-    assert len(refused) == 2 and all("advance() is running on this Simulation" in e for e in refused)
+    try:
+        # Bounded by frames, not calls: this thread's advance() is refused too while the other's
+        # runs, and a frame is done either way.
+        while thread.is_alive() and advanced["main"] + advanced["other"] < 100:
+            if _refusal(lambda: simulation.advance(1)) is None:
+                advanced["main"] += 1
+    finally:
+        stop.set()
+        thread.join()
+    assert sorted(refused) == ["advance", "contacts"], (refused, advanced)
+    for name, refusal in refused.items():
+        assert refusal == f"{name}(): advance() is running on this Simulation in another thread"
+    # A refused advance() simulates nothing: every frame is one that a call went through for.
+    assert simulation.frame == 1 + advanced["main"] + advanced["other"], advanced
 
 
 def test_ctrl_c_stops_advance_between_frames():
-    simulation = softbake.Simulation("balls10k")
-    timer = threading.Timer(0.3, _thread.interrupt_main)  # as Ctrl-C does, once advance() runs
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        simulation.advance(1000)
-    timer.join()
-    assert 1 < simulation.frame < 1001  # the frames done are kept, and it can go on
+    simulation = softbake.Simulation("default")
+    stop = threading.Event()
+    # As Ctrl-C does, once advance() is seen running.
+    watcher = _on_seeing_advance_run(simulation, lambda _: _thread.interrupt_main(), stop)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            simulation.advance(200)
+    finally:
+        stop.set()
+        watcher.join()
+    assert 1 < simulation.frame < 201  # the frames done are kept, and it can go on
     frame = simulation.frame
     simulation.advance()
     assert simulation.frame == frame + 1
@@ -377,10 +412,13 @@ def test_interrupted_run_resumes(tmp_path, capfd):
     out = tmp_path / "out"
     options = dict(frames=12, render=False, quiet=True)
 
+    finished = threading.Event()
+
     def interrupt():
         # Once frames are written the run's own handler is in place (before, Python's would
-        # raise KeyboardInterrupt in the test instead).
-        for _ in range(10000):
+        # raise KeyboardInterrupt in the test instead). Polled, for as long as the run lasts: the
+        # file appears by a rename in the run's writer thread.
+        while not finished.is_set():
             if (out / "obj" / "balls10k_0002.obj").exists():
                 os.kill(os.getpid(), signal.SIGINT)
                 return
@@ -388,8 +426,12 @@ def test_interrupted_run_resumes(tmp_path, capfd):
 
     thread = threading.Thread(target=interrupt)
     thread.start()
-    assert softbake.run("balls10k", out=out, **options) == 130
-    thread.join()
+    try:
+        code = softbake.run("balls10k", out=out, **options)
+    finally:
+        finished.set()
+        thread.join()
+    assert code == 130
     stderr = capfd.readouterr().err
     assert f"softbake run balls10k --out {out} --frames 12 --no-render --quiet --resume" in stderr
     assert json.loads((out / "manifest.json").read_text())["status"] == "incomplete"

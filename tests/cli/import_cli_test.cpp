@@ -125,7 +125,8 @@ TEST_F(ImportCliTest, TooManyBodiesAreRefusedForBuiltInScenesToo) {
       << run.output;
 }
 
-// exitCode is -1 for a softbake killed by a signal: the limits end the run with 1 exactly.
+// The limit kills the process that reads the file, never softbake itself: it ends with 1 exactly
+// (a signal that reached it would fail the test in runSoftbake()).
 TEST_F(ImportCliTest, AnImportPastItsTimeLimitExitsWithOneNamingTheLimitAndWritesNothing) {
   const fs::path box = importData("box.gltf");
   const fs::path out = folder_ / "out";

@@ -9,9 +9,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <climits>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -90,6 +94,59 @@ int waitFor(pid_t pid) {
   return status;
 }
 
+/// How waitForFile() ended.
+struct Waited {
+  bool appeared = false;  ///< the file is there, seen while the process ran
+  bool hung = false;      ///< the deadline passed; the process was killed
+  int endStatus = 0;      ///< otherwise the process ended first: its wait status
+};
+
+/// Waits until `file` exists while `pid` runs. A run that ends first, or one still short of the
+/// file at a deadline far beyond any run of the test's scene (then killed), ends the wait as a
+/// failure for the caller to report, instead of a test that hangs or signals a process that
+/// already finished. The deadline bounds the wait only; no result depends on it. Polls: the file
+/// appears by a rename in another process.
+Waited waitForFile(pid_t pid, const fs::path& file) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(2);
+  Waited waited;
+  while (!fs::exists(file)) {
+    if (waitpid(pid, &waited.endStatus, WNOHANG) == pid) return waited;
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitFor(pid);
+      waited.hung = true;
+      return waited;
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  waited.appeared = true;
+  return waited;
+}
+
+/// Why a wait did not see `file` appear, with the run's `log`.
+std::string missed(const Waited& waited, const fs::path& file, const fs::path& log) {
+  std::string why = "no " + file.string();
+  if (waited.hung)
+    why += " after 2 minutes: the run hangs";
+  else if (WIFEXITED(waited.endStatus))
+    why += ": the run ended first, exit code " + std::to_string(WEXITSTATUS(waited.endStatus));
+  else
+    why += ": the run was killed first, by signal " + std::to_string(WTERMSIG(waited.endStatus));
+  return why + "\n" + readFile(log);
+}
+
+/// The seed of the random kills: SOFTBAKE_TEST_SEED, to repeat a failure, else a new one.
+std::optional<unsigned> killSeed() {
+  const char* text = std::getenv("SOFTBAKE_TEST_SEED");
+  if (!text) return std::random_device()();
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long value = std::strtoull(text, &end, 10);
+  if (*text < '0' || *text > '9' || *end != '\0' || errno != 0 || value > UINT_MAX)
+    return std::nullopt;
+  return unsigned(value);
+}
+
 /// A scene of the paper's figure 4 (two bodies meeting over the ground), short, with its contacts.
 constexpr const char* kTwoBodies = R"({
   "name": "two_bodies",
@@ -163,23 +220,35 @@ TEST_F(Resume, KilledAtTheWorstMomentsThenResumedIsByteIdentical) {
 }
 
 TEST_F(Resume, KilledAtRandomFramesThenResumedIsByteIdentical) {
-  std::random_device device;
-  const unsigned seed = device();
-  std::mt19937 random(seed);
+  const std::optional<unsigned> seed = killSeed();
+  ASSERT_TRUE(seed) << "SOFTBAKE_TEST_SEED=" << std::getenv("SOFTBAKE_TEST_SEED")
+                    << " is not a seed: a whole number below 2^32";
+  RecordProperty("seed", std::to_string(*seed));
+  std::printf("seed %u (SOFTBAKE_TEST_SEED=%u repeats this test's kills)\n", *seed, *seed);
+  SCOPED_TRACE("seed " + std::to_string(*seed) + " (SOFTBAKE_TEST_SEED repeats it)");
+  std::mt19937 random(*seed);
   for (int trial = 0; trial < 3; ++trial) {
     // A kill -9 from outside once the cache holds a random number of frames.
     const int frames = std::uniform_int_distribution<int>(2, 34)(random);
-    SCOPED_TRACE("seed " + std::to_string(seed) + ", killed at cache frame " +
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", killed at cache frame " +
                  std::to_string(frames));
     const fs::path out = folder_ / ("random_" + std::to_string(trial));
     char name[64];
     std::snprintf(name, sizeof name, "cache/two_bodies_%04d.sbframe", frames);
-    const pid_t pid = startSoftbake(runWords(out), folder_ / "log.txt");
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!fs::exists(out / name) && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    const fs::path log = folder_ / "log.txt";
+    const pid_t pid = startSoftbake(runWords(out), log);
+    ASSERT_GT(pid, 0);
+    const Waited waited = waitForFile(pid, out / name);
+    ASSERT_TRUE(waited.appeared) << missed(waited, out / name, log);
     kill(pid, SIGKILL);
-    waitFor(pid);
+    // The kill landed mid-run: it had started (frame `frames` is in the cache), the process was
+    // still there to be killed (a finished one would have exited), and the run had not finished
+    // (the manifest is not complete).
+    const int status = waitFor(pid);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+        << "the run ended before the kill\n"
+        << readFile(log);
+    ASSERT_EQ(readManifestJson(out)["status"], "incomplete");
     expectResumesToReference(out);
   }
 }
@@ -187,10 +256,10 @@ TEST_F(Resume, KilledAtRandomFramesThenResumedIsByteIdentical) {
 TEST_F(Resume, SigtermLeavesAnIncompleteManifestAndTheResumeCommand) {
   const fs::path out = folder_ / "terminated";
   const pid_t pid = startSoftbake(runWords(out), folder_ / "log.txt");
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!fs::exists(out / "cache/two_bodies_0005.sbframe") &&
-         std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  ASSERT_GT(pid, 0);
+  const fs::path fifth = out / "cache/two_bodies_0005.sbframe";
+  const Waited waited = waitForFile(pid, fifth);
+  ASSERT_TRUE(waited.appeared) << missed(waited, fifth, folder_ / "log.txt");
   kill(pid, SIGTERM);
   const int status = waitFor(pid);
   const std::string log = readFile(folder_ / "log.txt");

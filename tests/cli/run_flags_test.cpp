@@ -97,7 +97,8 @@ TEST_F(RunFlags, FramePaddingSetsTheDigitsOfEveryFileName) {
             (std::vector<std::string>{"obj/default_%06d.obj", "contacts/default_%06d.json",
                                       "vdb/default_%06d.vdb", "cache/default_%06d.sbframe"}));
   EXPECT_TRUE(fs::exists(out / "cache/default_000002.sbframe"));
-  EXPECT_NE(runSoftbake("run --frame-padding 10 -o " + quoted(folder_ / "bad")).exitCode, 0);
+  const Result bad = runSoftbake("run --frame-padding 10 -o " + quoted(folder_ / "bad"));
+  EXPECT_EQ(bad.exitCode, 1) << bad.output;
 }
 
 TEST_F(RunFlags, LevelsReachTheSbhashBroadPhaseAndChangeNoResult) {
@@ -118,7 +119,8 @@ TEST_F(RunFlags, LevelsReachTheSbhashBroadPhaseAndChangeNoResult) {
     if (reference.empty()) reference = frame;
     EXPECT_TRUE(frame == reference) << "level " << levels << " changed the simulation";
   }
-  EXPECT_NE(runSoftbake("run --levels 9 -o " + quoted(folder_ / "bad")).exitCode, 0);
+  const Result bad = runSoftbake("run --levels 9 -o " + quoted(folder_ / "bad"));
+  EXPECT_EQ(bad.exitCode, 1) << bad.output;
 }
 
 TEST_F(RunFlags, ResponseNoneLetsTheBallsPassThroughEachOtherAndPaperDiffers) {
@@ -154,7 +156,8 @@ TEST_F(RunFlags, ResponseNoneLetsTheBallsPassThroughEachOtherAndPaperDiffers) {
       EXPECT_LT(centroids[1].x(), -0.5) << "ballB went on through ballA";
     }
   }
-  EXPECT_NE(runSoftbake("run --response bounce -o " + quoted(folder_ / "bad")).exitCode, 0);
+  const Result bad = runSoftbake("run --response bounce -o " + quoted(folder_ / "bad"));
+  EXPECT_EQ(bad.exitCode, 1) << bad.output;
 }
 
 /// The grids of a VDB file, read back by OpenVDB.
@@ -216,8 +219,8 @@ TEST_F(RunFlags, VdbCompressionShrinksTheFilesAndKeepsEveryVoxel) {
     for (auto v = surfaces[k]->cbeginValueOn(); v; ++v)
       ASSERT_EQ(*v, reference.getValue(v.getCoord())) << kinds[k] << " at " << v.getCoord();
   }
-  EXPECT_NE(runSoftbake("run --vdb --vdb-compression lzma -o " + quoted(folder_ / "bad")).exitCode,
-            0);
+  const Result bad = runSoftbake("run --vdb --vdb-compression lzma -o " + quoted(folder_ / "bad"));
+  EXPECT_EQ(bad.exitCode, 1) << bad.output;
 }
 
 struct Image {

@@ -61,6 +61,6 @@ TEST_F(SceneCommandTest, SceneFileIsPrintedAsParsed) {
 
 TEST_F(SceneCommandTest, UnknownNameFailsNamingIt) {
   const Result printed = runSoftbake("scene balls7k", true);
-  EXPECT_NE(printed.exitCode, 0);
+  EXPECT_EQ(printed.exitCode, 1) << printed.output;
   EXPECT_NE(printed.output.find("balls7k"), std::string::npos) << printed.output;
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -17,7 +18,8 @@
 namespace softbake::test {
 
 struct Result {
-  int exitCode = -1;  // -1: killed by a signal
+  int exitCode = -1;  ///< -1: killed by a signal (which fails the test) or never started
+  int signal = 0;     ///< the signal that killed it, if one did
   std::string output;
 };
 
@@ -32,17 +34,31 @@ inline std::string quoted(const std::filesystem::path& path) {
   return quoted(path.string());
 }
 
-/// A shell command's exit code and its stdout (what the command line sends there).
+/// A shell command's exit code and its stdout (what the command line sends there). `command` is
+/// one simple command (words and redirections, no `;`, `|` or `&&`): the shell execs it, so
+/// that a death by a signal reaches here as one. Run by the shell as a child, it would come back
+/// as the exit code 128 + the signal, a code softbake uses itself (130, 143) and that a test
+/// asserting only a non-zero code would take for a refusal. A death by a signal fails the test.
 inline Result runShell(const std::string& command) {
   Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
+  FILE* pipe = popen(("exec " + command).c_str(), "r");
+  if (!pipe) {
+    ADD_FAILURE() << "cannot start: " << command;
+    return result;
+  }
   char buffer[4096];
   std::size_t read = 0;
   while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
     result.output.append(buffer, read);
   const int status = pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (WIFEXITED(status)) {
+    result.exitCode = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    result.signal = WTERMSIG(status);
+    ADD_FAILURE() << "killed by signal " << result.signal << " (" << strsignal(result.signal)
+                  << "): " << command << "\n"
+                  << result.output;
+  }
   return result;
 }
 

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <set>
@@ -160,6 +159,7 @@ TEST(FramePipeline, SlowSinkHoldsTheProducerBackWithoutNewBuffers) {
   FramePipeline pipeline(sinks(std::make_unique<GateSink>(gate)), 50, kDepth);
 
   std::atomic<int> submitted{0};
+  std::atomic<bool> produced{false};
   std::set<const Frame*> frames;
   std::set<const Vec3*> buffers;
   std::thread producer([&] {
@@ -171,10 +171,12 @@ TEST(FramePipeline, SlowSinkHoldsTheProducerBackWithoutNewBuffers) {
       pipeline.submit(frame);
       ++submitted;
     }
+    produced = true;
   });
   // Every buffer is queued behind the closed gate; the next acquire() must wait for the sink.
-  while (submitted < int(kDepth)) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // A pipeline that handed out another buffer would let the producer run to its end instead.
+  while (pipeline.acquireWaits() == 0 && !produced) std::this_thread::yield();
+  EXPECT_EQ(pipeline.acquireWaits(), 1u);
   EXPECT_EQ(submitted.load(), int(kDepth));
   EXPECT_EQ(pipeline.framesWritten(0), 0u);
 

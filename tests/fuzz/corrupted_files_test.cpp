@@ -3,7 +3,11 @@
 // scene of its meshes, world building. Each must end in a clear error (softbake::Error naming the
 // file) or a load that holds together (fuzz::checkWorld); never a crash, a hang or memory without
 // bound. assimp reads in a child process (importers/assimp_snapshot.hpp), so a crash inside
-// assimp is one of the clear errors; a crash in softbake's own code takes this test down.
+// assimp is one of the clear errors; a crash in softbake's own code takes this test down. So is
+// a reading that hangs: the import time limit kills the child and names the file (enforced there,
+// tested through its hook in import_limits_test and import_cli_test), and such files are counted
+// here. How long an import takes is no result: a hang in softbake's own code is the ctest
+// timeout's to catch.
 //
 // A sample of the refused files also goes through the `softbake` binary: exit status 1, a message
 // naming the file, and no frame written.
@@ -12,7 +16,6 @@
 #include <sys/resource.h>
 
 #include <cctype>
-#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -112,11 +115,10 @@ TEST_P(CorruptedFiles, EndInAClearErrorOrASoundLoad) {
   options.maxImportMemoryMib = kImportMemoryMib;
   // The same seed every run, a different one per file.
   std::mt19937_64 random(std::hash<std::string>()(GetParam().path));
-  int refused = 0, loaded = 0, assimpCrashes = 0, throughTheBinary = 0;
+  int refused = 0, loaded = 0, assimpCrashes = 0, pastTheTimeLimit = 0, throughTheBinary = 0;
   for (int mutation = 0; mutation < kMutations; ++mutation) {
     writeBytes(file, mutate(original, mutation, random));
     SCOPED_TRACE(testing::Message() << "mutation " << mutation << " of " << good.filename());
-    const auto start = std::chrono::steady_clock::now();
     bool isRefused = false;
     try {
       const SceneFile scene = sceneFromMeshFile(file, options);
@@ -127,14 +129,14 @@ TEST_P(CorruptedFiles, EndInAClearErrorOrASoundLoad) {
       ++refused;
       const std::string message = error.what();
       if (message.find(": assimp crashed reading the file") != std::string::npos) ++assimpCrashes;
+      if (message.find(": reading the file took longer than the import time limit") !=
+          std::string::npos)
+        ++pastTheTimeLimit;
       // World building names the body, and the body is named after the file.
       EXPECT_TRUE(message.starts_with(file.string()) ||
                   message.starts_with("body '" + file.stem().string()))
           << message;
     }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    EXPECT_LT(seconds, 10.0) << "one import took " << seconds << " s";
 
     if (isRefused && throughTheBinary < kThroughTheBinary) {
       ++throughTheBinary;
@@ -155,8 +157,10 @@ TEST_P(CorruptedFiles, EndInAClearErrorOrASoundLoad) {
   EXPECT_LT(peakKib(RUSAGE_CHILDREN), 1'500'000u);
   RecordProperty("refused", refused);
   RecordProperty("loaded", loaded);
-  // Files that crashed assimp in its child process, for the record (fuzz/README.md).
+  // Files that crashed assimp in its child process, or kept it reading until the time limit, for
+  // the record (fuzz/README.md).
   RecordProperty("assimp_crashes", assimpCrashes);
+  RecordProperty("past_the_import_time_limit", pastTheTimeLimit);
 }
 
 INSTANTIATE_TEST_SUITE_P(GoodFiles, CorruptedFiles, ::testing::ValuesIn(kGoodFiles),
