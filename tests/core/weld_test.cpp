@@ -65,34 +65,54 @@ TEST(Weld, VerticesAllInOnePlaceAwayFromTheOriginWeldToOneParticle) {
 }
 
 TEST(Weld, MatchesBruteForceOnANoisyCloud) {
-  // Reference: O(n²) union of points within the tolerance of an earlier representative.
+  // The tolerance is kWeldTolerance of the mesh's diagonal, not an absolute length: in a cloud
+  // 200 units across it is 3.5e-4. Each cloud point gets copies 0.4 tolerances from it, which
+  // must weld (at most 0.8 apart), and a twin 3 tolerances away, which must not (at least 2.6
+  // from every copy). Reference: O(n²) distances against the tolerance computed here, in double.
   std::mt19937 random(7);
-  std::uniform_real_distribution<float> coordinate(-1, 1);
+  std::uniform_real_distribution<float> coordinate(-100, 100);
   std::vector<Vec3f> points;
   for (int i = 0; i < 400; ++i)
     points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  Eigen::AlignedBox3d box;
+  for (const Vec3f& p : points) box.extend(p.cast<double>());
+  // The copies move the bounds by under a tolerance: a millionth of the diagonal again.
+  const double tolerance = double(kWeldTolerance) * box.diagonal().norm();
+  std::normal_distribution<double> gauss;
+  const auto offset = [&](double length) {
+    const Eigen::Vector3d direction(gauss(random), gauss(random), gauss(random));
+    return (length * direction.normalized()).cast<float>().eval();
+  };
   std::vector<Vec3f> positions;
   std::vector<Triangle> triangles;
-  // Each triangle's corners are copies of cloud points, nudged far below the weld tolerance.
   std::uniform_int_distribution<int> pick(0, 399);
-  std::uniform_real_distribution<float> nudge(-1e-8f, 1e-8f);
+  std::uniform_int_distribution<int> far(0, 9);
   for (int t = 0; t < 1500; ++t) {
     Triangle tri;
     for (int c = 0; c < 3; ++c) {
       tri[c] = Index(positions.size());
-      positions.push_back(points[pick(random)] +
-                          Vec3f(nudge(random), nudge(random), nudge(random)));
+      const int k = pick(random);
+      positions.push_back(far(random) == 0 ? Vec3f(points[k] + Vec3f(float(3 * tolerance), 0, 0))
+                                           : Vec3f(points[k] + offset(0.4 * tolerance)));
     }
     triangles.push_back(tri);
   }
   const WeldedMesh welded = weldByPosition(positions, triangles);
+  std::size_t welds = 0, apart = 0;
   for (std::size_t a = 0; a < positions.size(); ++a)
     for (std::size_t b = a + 1; b < positions.size(); ++b) {
       if (welded.renderToParticle[a] == kNoParticle || welded.renderToParticle[b] == kNoParticle)
         continue;
-      const bool close = (positions[a] - positions[b]).norm() < 1e-6f;
-      ASSERT_EQ(close, welded.renderToParticle[a] == welded.renderToParticle[b]) << a << " " << b;
+      const double distance = (positions[a] - positions[b]).cast<double>().norm();
+      if (distance > 10 * tolerance) continue;  // different cloud points
+      const bool close = distance < tolerance;
+      (close ? welds : apart) += 1;
+      ASSERT_EQ(close, welded.renderToParticle[a] == welded.renderToParticle[b])
+          << a << " " << b << ": " << distance / tolerance << " tolerances apart";
     }
+  // Both kinds of pair are there to be told apart.
+  EXPECT_GT(welds, 1000u);
+  EXPECT_GT(apart, 100u);
 }
 
 }  // namespace
