@@ -71,6 +71,22 @@ void checkMesh(const BodySetup& setup) {
       throw Error(cat("body '", setup.name, "': a vertex position is not a finite number"));
 }
 
+/// A closed surface whose volume is at most this fraction of its area to the power 3/2 is flat.
+/// A sphere has 0.094, a sheet 1 mm thick and a metre wide 3.5e-4; 1e-6 is a slab 3 µm thick a
+/// metre wide, less than float positions can resolve on a body of that size.
+constexpr double kFlatVolumeRatio = 1e-6;
+
+double surfaceArea(const WeldedMesh& welded) {
+  double area = 0;
+  for (const Triangle& t : welded.triangles) {
+    const Vec3d a = welded.positions[t[0]].cast<double>();
+    area += 0.5 * (welded.positions[t[1]].cast<double>() - a)
+                      .cross(welded.positions[t[2]].cast<double>() - a)
+                      .norm();
+  }
+  return area;
+}
+
 /// A body's mesh welded and wound outwards, with its edges. A body without an inside gets no
 /// volume and so no pressure.
 struct WeldedBody {
@@ -105,8 +121,16 @@ WeldedBody weldBody(const BodySetup& setup, const BodyNotes& note) {
     volume = -volume;
     note("the mesh was wound inside-out; its triangles were flipped");
   }
-  if (closed && !(volume > 0)) closed = false;
-  if (!closed && setup.material.pressure != 0) {
+  const double area = closed ? surfaceArea(welded) : 0.0;
+  if (closed && !(volume > kFlatVolumeRatio * std::pow(area, 1.5))) {
+    // A closed surface folded flat (a box of zero thickness, as CAD exports trim and edge pieces)
+    // encloses only rounding: V_rest is noise, and the gas law's nRT/V and the bulk term's
+    // K/V_rest turn that noise into forces without bound. It has no inside to keep.
+    closed = false;
+    if (setup.material.pressure != 0 || setup.material.bulkModulus != 0)
+      note(cat("the mesh is closed but flat (volume ", volume, " inside an area of ", area,
+               "): it is taken as open, pressure is off"));
+  } else if (!closed && setup.material.pressure != 0) {
     if (topology.boundaryEdges || topology.nonManifoldEdges)
       note(cat("the mesh is open (", topology.boundaryEdges, " boundary, ",
                topology.nonManifoldEdges, " non-manifold edges): pressure is off"));
