@@ -22,6 +22,9 @@ constexpr std::size_t kChunks = 128;
 /// above single precision's rounding at scene scale and well below what the response keeps.
 constexpr double kToleranceOfSkin = 0.01;
 constexpr double kSeparationOfSkin = 0.1;
+/// A meeting within its tolerance at the substep's start that ends it closer by less than this
+/// fraction of its separation has not closed: that much is float rounding (notClosing).
+constexpr double kRoundingOfSeparation = 0.01;
 /// An open body's thickness is at most this fraction of its short edges (kShortEdgeShare of them
 /// are shorter): a sheet's own vertices closer than its thickness would be pushed apart in every
 /// substep. A tube of 0.26 mm strips under the default 0.5 mm held the failsafe at its last stage
@@ -337,8 +340,14 @@ bool CollisionFailsafe::notClosing(const CollisionGeometry& geometry, std::span<
              impact.impact.normal.dot(geometry.vertex(at, impact.vertex[k]).cast<double>());
     return sum;
   };
+  // No closer by less than a hundredth of the separation is rounding: a zone translated as one
+  // (stage 2) keeps its primitives where they were relative to each other only to float
+  // precision, and taking that for closing met the zone with itself in every pass, until it was
+  // left at the substep's start without its velocity: a falling assembly of fitted parts lost
+  // momentum at every such substep and hung in the air.
   const double before = gap(start), after = gap(end);
-  return (before > 0) == (after > 0) && std::abs(after) >= std::abs(before);
+  return (before > 0) == (after > 0) &&
+         std::abs(after) >= std::abs(before) - kRoundingOfSeparation * impact.separation;
 }
 
 bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
