@@ -109,6 +109,20 @@ SceneSetup ballOverThickSheet() {
   return setup;
 }
 
+/// Lowers the ball of ballOverThickSheet() within the substep, its start and its end alike, until
+/// its lowest vertex starts `gap` above the sheet's plane.
+void lowerBallTo(Substep& step, Scalar gap) {
+  const Body& ballBody = step.scene.topology.bodies[1];
+  const Index begin = ballBody.firstParticle, end = begin + ballBody.particleCount;
+  Scalar lowest = 1e9f;
+  for (Index p = begin; p < end; ++p) lowest = std::min(lowest, step.scene.substepStart[p].y());
+  const Scalar down = lowest - gap;
+  for (Index p = begin; p < end; ++p) {
+    step.scene.substepStart[p].y() -= down;
+    step.scene.state.position[p].y() -= down;
+  }
+}
+
 TEST(Failsafe, BallsThrownDeepIntoEachOtherEndApartWithTheirMomentum) {
   SceneSetup setup = noGravity();
   setup.bodies = {ball("left", Vec3f(-0.35f, 0, 0)),
@@ -213,15 +227,7 @@ TEST(Failsafe, AMeetingAtTheStartThatDoesNotCloseNeitherHoldsNorFreezesTheSubste
   // the last resort froze the whole substep.
   Substep step(ballOverThickSheet(), {Vec3(0, 0, 0), Vec3(0, 0.0001f, 0)},
                {.impulses = 0, .translatingZones = 0, .zones = 8});
-  const Body& ballBody = step.scene.topology.bodies[1];
-  Scalar lowest = 1e9f;
-  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
-    lowest = std::min(lowest, step.scene.substepStart[p].y());
-  const Scalar down = lowest - Scalar(0.0005);
-  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p) {
-    step.scene.substepStart[p].y() -= down;
-    step.scene.state.position[p].y() -= down;
-  }
+  lowerBallTo(step, Scalar(0.0005));
   const std::vector<Vec3> moved = step.scene.state.position;
   const FailsafeStats stats = step.apply();
   EXPECT_EQ(stats.impacts, 0u);
@@ -243,15 +249,7 @@ TEST(Failsafe, AMeetingCarriedAlongWithItsNeighbourIsNoMeeting) {
   setup.bodies[0].material.thickness = 0;
   const Vec3 carried(0.013f, -0.047f, 0.029f);
   Substep step(setup, {carried, carried});
-  const Body& ballBody = step.scene.topology.bodies[1];
-  Scalar lowest = 1e9f;
-  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p)
-    lowest = std::min(lowest, step.scene.substepStart[p].y());
-  const Scalar down = lowest - Scalar(5e-6);
-  for (Index p = ballBody.firstParticle; p < ballBody.firstParticle + ballBody.particleCount; ++p) {
-    step.scene.substepStart[p].y() -= down;
-    step.scene.state.position[p].y() -= down;
-  }
+  lowerBallTo(step, Scalar(5e-6));
   const std::vector<Vec3> velocity = step.scene.state.velocity;
   const FailsafeStats stats = step.apply();
   EXPECT_EQ(stats.impacts, 0u);
