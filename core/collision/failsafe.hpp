@@ -98,11 +98,14 @@ struct FailsafeImpact {
 
 /// How many passes each stage gets. The defaults follow Bridson et al., who use a handful of
 /// impulse passes: most meetings are single and one pass settles them, a second measures what the
-/// first pushed into others. Zones translate with their momentum for a few passes; after that a
-/// zone stays where it started, which always frees it, so the zones stop growing soon after.
+/// first pushed into others. Zones translate with their momentum for most of their passes: a
+/// zone grows by its neighbours one pass at a time, and an assembly of fitted parts is a long
+/// chain of them (an engine of 115 parts needed more than 8 passes, and zones left at their start
+/// took their velocity with them: 66 N s in one frame, and the falling engine hung in the air).
+/// The last few passes leave a zone where it started, which always frees it.
 struct FailsafePasses {
   int impulses = 4;
-  int translatingZones = 8;
+  int translatingZones = 60;
   int zones = 64;  ///< in all, translating ones included
 };
 
