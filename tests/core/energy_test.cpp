@@ -78,7 +78,7 @@ class DroppedOnTheGround : public ::testing::TestWithParam<IntegratorKind> {};
 
 TEST_P(DroppedOnTheGround, NeverGainsEnergy) {
   SceneSetup scene = test::ballScene(*findMaterialPreset("rubber"), 3, 0.5f, {0, 2, 0});
-  scene.bodies[0].velocity = Vec3f(0.5f, 0, 0);
+  scene.bodies[0].velocity = Vec3(0.5f, 0, 0);
   scene.planes[0].restitution = 0.3f;
   scene.planes[0].friction = 0.2f;
   scene.settings.integrator = GetParam();
