@@ -20,6 +20,7 @@
 #include "core/mesh/icosphere.hpp"
 #include "core/simulator.hpp"
 #include "importers/scene_file.hpp"
+#include "tests/core/test_worlds.hpp"
 #include "tests/support/definition_pairs.hpp"
 #include "tests/support/intersection_checker.hpp"
 
@@ -139,24 +140,18 @@ TEST(SelfCollision, IsOnByDefaultForOpenAndClosedBodies) {
 /// onto it at 4 m/s, which presses it into the ground, under the scene's defaults but for the
 /// jelly ball's `selfCollision`.
 std::size_t mostPairsWithinABallPressedIntoTheGround(std::optional<bool> selfCollision) {
-  SceneSetup scene;
-  scene.name = "pressed";
+  Material jelly = *findMaterialPreset("jelly");
+  jelly.bulkModulus = 0;  // as the figure examples keep it
+  SceneSetup scene = test::ballScene(jelly, 3, 0.3f, Vec3f(0, 0.31f, 0));
   scene.settings.frames = 36;
-  BodySetup jelly;
-  jelly.name = "jelly";
-  jelly.mesh = makeIcosphere(3, 0.3f, Vec3f(0, 0.31f, 0));
-  jelly.material = *findMaterialPreset("jelly");
-  jelly.material.bulkModulus = 0;  // as the figure examples keep it
-  jelly.mass = 1;
-  jelly.selfCollision = selfCollision;
+  scene.bodies[0].selfCollision = selfCollision;
   BodySetup weight;
   weight.name = "weight";
   weight.mesh = makeIcosphere(3, 0.25f, Vec3f(0.03f, 0.9f, 0));
   weight.material = *findMaterialPreset("stiff");
   weight.mass = 10;
   weight.velocity = Vec3(0, -4, 0);
-  scene.bodies = {jelly, weight};
-  scene.planes.push_back(PlaneCollider{});
+  scene.bodies.push_back(weight);
   Simulator simulator(buildSceneTopology(scene));
   std::size_t most = 0;
   for (int frame = 2; frame <= scene.settings.frames; ++frame) {

@@ -5,7 +5,6 @@
 #include <algorithm>
 
 #include "core/dynamics/material.hpp"
-#include "core/mesh/icosphere.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 
@@ -135,19 +134,12 @@ TEST(Pins, AVertexPinsTheParticleItWeldsInto) {
 /// radius 0.3 m with the rubber preset's springs but neither gas nor bulk term, so that only its
 /// springs hold it up, and the bend stiffness given. Scene defaults otherwise (implicit, auto).
 double emptyBallHeight(Scalar bendStiffness) {
-  SceneSetup scene;
-  scene.name = "empty ball";
+  Material material = *findMaterialPreset("rubber");
+  material.pressure = 0;
+  material.bulkModulus = 0;
+  material.bendStiffness = bendStiffness;
+  SceneSetup scene = test::ballScene(material, 3, 0.3f, Vec3f(0, 0.301f, 0));
   scene.settings.frames = 48;
-  BodySetup ball;
-  ball.name = "ball";
-  ball.mesh = makeIcosphere(3, 0.3f, Vec3f(0, 0.301f, 0));
-  ball.material = *findMaterialPreset("rubber");
-  ball.material.pressure = 0;
-  ball.material.bulkModulus = 0;
-  ball.material.bendStiffness = bendStiffness;
-  ball.mass = 1;
-  scene.bodies.push_back(ball);
-  scene.planes.push_back(PlaneCollider{});
   Simulator simulator(buildSceneTopology(scene));
   for (int frame = 2; frame <= scene.settings.frames; ++frame) simulator.advanceToFrame(frame);
   Scalar top = 0;
