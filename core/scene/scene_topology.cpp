@@ -76,14 +76,16 @@ void checkMesh(const BodySetup& setup) {
 /// metre wide, less than float positions can resolve on a body of that size.
 constexpr double kFlatVolumeRatio = 1e-6;
 
+/// A welded triangle's area, in double: the mass spread and the flatness test both sum it.
+double triangleArea(const WeldedMesh& welded, const Triangle& t) {
+  const Vec3d a = welded.positions[t[0]].cast<double>(), b = welded.positions[t[1]].cast<double>(),
+              c = welded.positions[t[2]].cast<double>();
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
 double surfaceArea(const WeldedMesh& welded) {
   double area = 0;
-  for (const Triangle& t : welded.triangles) {
-    const Vec3d a = welded.positions[t[0]].cast<double>();
-    area += 0.5 * (welded.positions[t[1]].cast<double>() - a)
-                      .cross(welded.positions[t[2]].cast<double>() - a)
-                      .norm();
-  }
+  for (const Triangle& t : welded.triangles) area += triangleArea(welded, t);
   return area;
 }
 
@@ -153,12 +155,9 @@ void addParticles(SceneTopology& scene, const WeldedMesh& welded, Index bodyInde
   std::vector<double> area(welded.positions.size(), 0.0);
   double totalArea = 0;
   for (const Triangle& t : welded.triangles) {
-    const Vec3d a = welded.positions[t[0]].cast<double>(),
-                b = welded.positions[t[1]].cast<double>(),
-                c = welded.positions[t[2]].cast<double>();
-    const double triangleArea = 0.5 * (b - a).cross(c - a).norm();
-    for (Index v : t) area[v] += triangleArea / 3;
-    totalArea += triangleArea;
+    const double triangle = triangleArea(welded, t);
+    for (Index v : t) area[v] += triangle / 3;
+    totalArea += triangle;
     scene.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
   }
   for (double particleArea : area) {

@@ -129,7 +129,6 @@ TEST(Pins, AVertexPinsTheParticleItWeldsInto) {
   }
 }
 
-
 /// The height of a ball's top after it has sat on the ground for two seconds: an icosphere of
 /// radius 0.3 m with the rubber preset's springs but neither gas nor bulk term, so that only its
 /// springs hold it up, and the bend stiffness given. Scene defaults otherwise (implicit, auto).
