@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "bench/scene_sizes.hpp"
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/mesh/icosphere.hpp"
 
 namespace softbake {

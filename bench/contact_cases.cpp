@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
       contacts += simulator.lastFrameStats().contacts;
       const auto checkStart = std::chrono::steady_clock::now();
       const test::IntersectionCount count =
-          test::countIntersectingPairs(simulator.topology().collision, simulator.state().position);
+          test::countIntersectingPairs(simulator.collision(), simulator.state().position);
       checkSeconds +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - checkStart).count();
       worstBetween = std::max(worstBetween, count.betweenSurfaces);

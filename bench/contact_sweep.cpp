@@ -29,7 +29,7 @@ std::string run(const char* lower, const char* upper, float ratio) {
     } catch (const Error&) {
       return "blew up at " + std::to_string(frame);
     }
-    worst = std::max(worst, test::countIntersectingPairs(simulator.topology().collision,
+    worst = std::max(worst, test::countIntersectingPairs(simulator.collision(),
                                                          simulator.state().position)
                                 .betweenSurfaces);
     rise = std::max(rise, computeEnergy(simulator.topology(), simulator.state()).total() - start);

@@ -21,7 +21,7 @@
 #include "core/collision/plane_contact.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/integrator.hpp"
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/scene/scene_topology.hpp"

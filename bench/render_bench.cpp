@@ -46,7 +46,7 @@
 #include <vector>
 
 #include "bench/scene_sizes.hpp"
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/scene/scene_setup.hpp"

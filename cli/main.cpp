@@ -25,7 +25,7 @@
 #include "cli/shell_quote.hpp"
 #include "cli/verify_command.hpp"
 #include "cli/wedge.hpp"
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "render/frame_renderer.hpp"
 

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/scene/simulation_state.hpp"
 
 namespace softbake {

@@ -13,6 +13,7 @@ namespace softbake {
 
 Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationState state)
     : topology_(std::move(topology)),
+      collision_(buildCollisionGeometry(*topology_)),
       state_(std::move(state)),
       forces_(*topology_),
       stepper_(makeStepper(*topology_)),
@@ -25,7 +26,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     throw Error(cat("a simulation state of ", state_.position.size(), " positions and ",
                     state_.velocity.size(), " velocities does not fit a scene of ",
                     topology_->particleCount(), " particles"));
-  const std::vector<CollisionSurface>& surfaces = topology_->collision.surfaces;
+  const std::vector<CollisionSurface>& surfaces = collision_.surfaces;
   std::size_t moving = 0;
   for (const CollisionSurface& surface : surfaces) {
     moving += surface.moving;
@@ -35,10 +36,10 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   // Detection only (response "none", the paper's figure 5b) lets bodies pass into each other.
   const CollisionSettings& collisions = topology_->settings.collisions;
   const bool setAside = collisions.initialOverlap == InitialOverlapMode::SetAside;
-  initialOverlaps_ =
-      findInitialOverlaps(*topology_, state_.position, setAside ? fittedDistance() : Scalar(0));
+  initialOverlaps_ = findInitialOverlaps(*topology_, collision_, state_.position,
+                                         setAside ? fittedDistance() : Scalar(0));
   if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
-    failsafe_.emplace(*topology_);
+    failsafe_.emplace(*topology_, collision_);
   if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
   } else if (setAside) {
@@ -51,12 +52,12 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
                std::back_inserter(initiallyFitted_));
   } else {
     // "separate": a body cannot be moved apart from itself, so its own pairs are set aside.
-    const std::vector<Index>& surfaceOf = topology_->collision.triangleSurface;
+    const std::vector<Index>& surfaceOf = collision_.triangleSurface;
     for (const TrianglePair& pair : initialOverlaps_.pairs)
       if (surfaceOf[pair.first] == surfaceOf[pair.second]) initiallySetAside_.push_back(pair);
     if (collides_ && collisions.response != ResponseMode::None &&
         initiallySetAside_.size() < initialOverlaps_.pairs.size()) {
-      detangler_.emplace(*topology_);
+      detangler_.emplace(*topology_, collision_);
       nameTangledSurfaces(initialOverlaps_);
     }
   }
@@ -71,8 +72,8 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
 
 void Simulator::chooseContactAccuracySubsteps() {
   const ContactAccuracy accuracy = contactAccuracySubsteps(
-      *topology_, state_.position, state_.velocity, detector_.candidatePairs(), contactEdgeLength_,
-      contactAccuracyScratch_);
+      *topology_, collision_, state_.position, state_.velocity, detector_.candidatePairs(),
+      contactEdgeLength_, contactAccuracyScratch_);
   substeps_.substeps = std::max(accuracy.substeps, stepper_->fewestAutoSubsteps(substeps_));
   substeps_.closingSpeed = accuracy.closingSpeed;
   substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;
@@ -94,14 +95,14 @@ void Simulator::step(int frame) {
   clock.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
-    detector_.detect(topology, {substepStart_, state_.position}, &clock);
+    detector_.detect(topology, collision_, {substepStart_, state_.position}, &clock);
     std::span<const std::pair<Index, Index>> tangled;
     if (detangler_ && detangler_->any()) {
-      stats_.detangledBodies += detangler_->apply(topology, detector_, state_, dt);
+      stats_.detangledBodies += detangler_->apply(topology, collision_, detector_, state_, dt);
       tangled = detangler_->movedPairs();
     }
-    const CollisionResponseStats responses =
-        respondToCollisions(topology, detector_, response, state_, contacts_, edgePushes_, tangled);
+    const CollisionResponseStats responses = respondToCollisions(
+        topology, collision_, detector_, response, state_, contacts_, edgePushes_, tangled);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
@@ -111,7 +112,7 @@ void Simulator::step(int frame) {
       topology, substepStart_, state_, response != ResponseMode::None, stepper_->planeHolds());
   clock.lap(Stage::Planes);
   if (failsafe_) {
-    stats_.failsafe += failsafe_->apply(topology, detector_, substepStart_, state_, dt);
+    stats_.failsafe += failsafe_->apply(topology, collision_, detector_, substepStart_, state_, dt);
     clock.lap(Stage::Failsafe);
   }
   stats_.planeContacts += stepper_->endStep();
@@ -125,7 +126,7 @@ void Simulator::beginFrame() {
   // Surfaces still tangled are left to the detangler and the response until a frame finds them
   // apart.
   if ((failsafe_ && failsafe_->anyTangled()) || (detangler_ && detangler_->any()))
-    nameTangledSurfaces(findInitialOverlaps(*topology_, state_.position));
+    nameTangledSurfaces(findInitialOverlaps(*topology_, collision_, state_.position));
   // The pairs set aside at the start that still intersect stay set aside; those found apart
   // collide from now on.
   updateSetAside();
@@ -139,19 +140,19 @@ void Simulator::nameTangledSurfaces(const InitialOverlaps& overlaps) {
   for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
     if (overlap.firstSurface != overlap.secondSurface) between.bySurfaces.push_back(overlap);
   if (failsafe_) failsafe_->leaveTangled(between);
-  if (detangler_) detangler_->setTangled(*topology_, between);
+  if (detangler_) detangler_->setTangled(collision_, between);
 }
 
 void Simulator::updateSetAside() {
   if (!initiallySetAside_.empty()) {
-    stillIntersecting(*topology_, state_.position, initiallySetAside_, setAsideScratch_);
+    stillIntersecting(collision_, state_.position, initiallySetAside_, setAsideScratch_);
     detector_.setAside(setAsideScratch_);
   }
   if (!initiallyFitted_.empty()) {
     // Let go only beyond the reach of two skins, where the boxes of the two no longer meet: a
     // fit that breathes by a little more than one skin was handed back and forth between the
     // failsafe and the response, whose lifts at the rims pushed stacked blocks off each other.
-    stillClose(*topology_, state_.position, initiallyFitted_, 2 * fittedDistance(),
+    stillClose(collision_, state_.position, initiallyFitted_, 2 * fittedDistance(),
                setAsideScratch_);
     detector_.setFitted(setAsideScratch_);
   }
@@ -191,16 +192,17 @@ void Simulator::restore(const SimulationCheckpoint& checkpoint) {
                     " does not fit this scene of ", n, " particles under the ",
                     integratorName(topology_->settings.integrator), " integrator"));
   for (const TrianglePair& pair : checkpoint.touchingPairs)
-    if (pair.second >= topology_->collision.triangleVertices.size())
+    if (pair.second >= collision_.triangleVertices.size())
       throw Error(cat("a checkpoint names triangle ", pair.second, " of a scene of ",
-                      topology_->collision.triangleVertices.size(), " collision triangles"));
+                      collision_.triangleVertices.size(), " collision triangles"));
   state_ = checkpoint.state;
   stepper_->restore(checkpoint.warmStart, checkpoint.planeHolds);
   detector_.restoreCandidatePairs(checkpoint.touchingPairs);
   // The next frame names the tangled surfaces again from the positions whenever any were left
   // (beginFrame), so whether any were is all that carries over.
-  nameTangledSurfaces(checkpoint.tangled ? findInitialOverlaps(*topology_, state_.position)
-                                         : InitialOverlaps{});
+  nameTangledSurfaces(checkpoint.tangled
+                          ? findInitialOverlaps(*topology_, collision_, state_.position)
+                          : InitialOverlaps{});
   // Set aside: a function of the positions alone (updateSetAside()), so nothing to carry.
   updateSetAside();
   stepsTaken_ = checkpoint.stepsTaken;

@@ -21,9 +21,11 @@
 
 #include "core/checkpoint.hpp"
 #include "core/collision/contact.hpp"
+#include "core/collision/contact_accuracy.hpp"
 #include "core/collision/detangle.hpp"
 #include "core/collision/detection.hpp"
 #include "core/collision/failsafe.hpp"
+#include "core/collision/geometry.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
 #include "core/dynamics/forces.hpp"
@@ -57,6 +59,8 @@ class Simulator {
   explicit Simulator(SceneTopology topology);
 
   const SceneTopology& topology() const { return *topology_; }
+  /// Every triangle that takes part in collisions, soft and static, in one index space.
+  const CollisionGeometry& collision() const { return collision_; }
   /// For exporters and the renderer, which keep the topology for as long as they write.
   const std::shared_ptr<const SceneTopology>& sharedTopology() const { return topology_; }
   const SimulationState& state() const { return state_; }
@@ -126,6 +130,7 @@ class Simulator {
   void chooseContactAccuracySubsteps();
 
   std::shared_ptr<const SceneTopology> topology_;
+  CollisionGeometry collision_;
   SimulationState state_;
   ForceBuffers forces_;
   std::unique_ptr<Stepper> stepper_;  ///< settings.integrator

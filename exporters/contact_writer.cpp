@@ -26,8 +26,8 @@ ContactWriter::ContactWriter(const SceneTopology& topology,
   for (const StaticMeshCollider& collider : topology.staticMeshes)
     surfaceNames_.push_back(collider.name);
   for (const PlaneCollider& plane : topology.planes) planeNames_.push_back(plane.name);
-  for (const CollisionSurface& surface : topology.collision.surfaces)
-    surfaceFirstTriangle_.push_back(surface.firstTriangle);
+  for (Index surface = 0; surface < topology.surfaceCount(); ++surface)
+    surfaceFirstTriangle_.push_back(topology.surfaceFirstTriangle(surface));
   makeDirectories(outputDirectory_ / naming_.folder);
 }
 

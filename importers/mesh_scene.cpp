@@ -3,7 +3,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/mesh_import.hpp"

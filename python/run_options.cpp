@@ -7,7 +7,7 @@
 #include <functional>
 #include <map>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/text.hpp"
 #include "render/frame_renderer.hpp"

@@ -138,8 +138,8 @@ class Simulation {
     });
     const SceneTopology& topology = simulator_->topology();
     for (const Body& body : topology.bodies) bodyNames_.push_back(body.name);
-    for (const CollisionSurface& surface : topology.collision.surfaces)
-      surfaceFirstTriangle_.push_back(surface.firstTriangle);
+    for (Index surface = 0; surface < topology.surfaceCount(); ++surface)
+      surfaceFirstTriangle_.push_back(topology.surfaceFirstTriangle(surface));
   }
 
   /// Simulates `frames` more frames, without the GIL; a pending KeyboardInterrupt (or another
@@ -216,7 +216,10 @@ class Simulation {
       contact["kind"] = std::string(contactKindName(c.kind));
       contact["position"] = triple(c.position);
       contact["normal"] = triple(c.normal);
-      contact["bodies"] = py::make_tuple(topology.surfaceName(c.surfaceA), topology.partnerName(c));
+      contact["bodies"] =
+          py::make_tuple(topology.surfaceName(c.surfaceA), c.kind == ContactKind::Plane
+                                                               ? topology.planes[c.surfaceB].name
+                                                               : topology.surfaceName(c.surfaceB));
       contact["triangles"] =
           py::make_tuple(local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB));
       contact["particle"] =

@@ -9,9 +9,8 @@
 
 namespace softbake {
 
-Detangler::Detangler(const SceneTopology& topology)
-    : movable_(topology.collision.surfaces.size(), 0),
-      translation_(topology.bodies.size(), Vec3d::Zero()) {
+Detangler::Detangler(const SceneTopology& topology, const CollisionGeometry& geometry)
+    : movable_(geometry.surfaces.size(), 0), translation_(topology.bodies.size(), Vec3d::Zero()) {
   for (std::size_t b = 0; b < topology.bodies.size(); ++b) {
     const Body& body = topology.bodies[b];
     bool pinned = false;
@@ -21,13 +20,13 @@ Detangler::Detangler(const SceneTopology& topology)
   }
 }
 
-void Detangler::setTangled(const SceneTopology& topology, const InitialOverlaps& overlaps) {
+void Detangler::setTangled(const CollisionGeometry& geometry, const InitialOverlaps& overlaps) {
   pairs_.clear();
   moved_.clear();
   for (const SurfaceOverlap& overlap : overlaps.bySurfaces) {
     const Index a = overlap.firstSurface, b = overlap.secondSurface;
     if (a == b || !(movable_[a] || movable_[b])) continue;
-    if (!topology.collision.surfaceClosed[a] && !topology.collision.surfaceClosed[b]) continue;
+    if (!geometry.surfaceClosed[a] && !geometry.surfaceClosed[b]) continue;
     pairs_.emplace_back(std::min(a, b), std::max(a, b));
   }
   std::sort(pairs_.begin(), pairs_.end());
@@ -36,10 +35,9 @@ void Detangler::setTangled(const SceneTopology& topology, const InitialOverlaps&
   moved_.reserve(pairs_.size());
 }
 
-std::size_t Detangler::apply(const SceneTopology& topology, const CollisionDetector& detector,
-                             SimulationState& state, Scalar dt) {
+std::size_t Detangler::apply(const SceneTopology& topology, const CollisionGeometry& geometry,
+                             const CollisionDetector& detector, SimulationState& state, Scalar dt) {
   if (pairs_.empty()) return 0;
-  const CollisionGeometry& geometry = topology.collision;
   std::fill(direction_.begin(), direction_.end(), Vec3d::Zero());
   std::fill(depth_.begin(), depth_.end(), Scalar(0));
   // The detector's edge contacts are sorted: the sums are the same for any thread count.

@@ -33,6 +33,7 @@
 
 namespace softbake {
 
+struct CollisionGeometry;
 struct SceneTopology;
 struct SimulationState;
 class CollisionDetector;
@@ -43,11 +44,11 @@ inline constexpr Scalar kDetangleSpeed = Scalar(1);
 
 class Detangler {
  public:
-  explicit Detangler(const SceneTopology& topology);
+  explicit Detangler(const SceneTopology& topology, const CollisionGeometry& geometry);
 
   /// The pairs of `overlaps` between two different surfaces of which at least one can move: the
   /// ones this stage takes apart. Replaces the previous list.
-  void setTangled(const SceneTopology& topology, const InitialOverlaps& overlaps);
+  void setTangled(const CollisionGeometry& geometry, const InitialOverlaps& overlaps);
   /// Sorted, lower surface first.
   std::span<const std::pair<Index, Index>> pairs() const { return pairs_; }
   bool any() const { return !pairs_.empty(); }
@@ -58,8 +59,8 @@ class Detangler {
 
   /// After detection, before the response: moves the tangled bodies apart (positions only).
   /// Returns how many bodies it moved.
-  std::size_t apply(const SceneTopology& topology, const CollisionDetector& detector,
-                    SimulationState& state, Scalar dt);
+  std::size_t apply(const SceneTopology& topology, const CollisionGeometry& geometry,
+                    const CollisionDetector& detector, SimulationState& state, Scalar dt);
 
  private:
   std::vector<std::pair<Index, Index>> pairs_;

@@ -171,10 +171,9 @@ void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
   dropSortedPairs(setAside_, pairs);
 }
 
-void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotion& motion,
-                               StageClock* clock) {
-  const CollisionGeometry& geometry = topology.collision;
-  updateCollisionBoxes(topology, motion, boxes_, topology.settings.skin, particleBoxes_);
+void CollisionDetector::detect(const SceneTopology& topology, const CollisionGeometry& geometry,
+                               const SubstepMotion& motion, StageClock* clock) {
+  updateCollisionBoxes(topology, geometry, motion, boxes_, topology.settings.skin, particleBoxes_);
   updateFlatPatches(geometry, motion.start, motion.end, patchFlat_);
   if (clock) clock->lap(Stage::Boxes);
   if (pairCache_)
@@ -184,13 +183,13 @@ void CollisionDetector::detect(const SceneTopology& topology, const SubstepMotio
   dropIgnoredPairs(geometry, pairs_);
   dropSortedPairs(fitted_, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
-  findContacts(topology, motion);
+  findContacts(topology, geometry, motion);
   if (clock) clock->lap(Stage::NarrowPhase);
 }
 
 void CollisionDetector::dropTangledContacts(const SceneTopology& topology,
+                                            const CollisionGeometry& geometry,
                                             const SubstepMotion& motion) {
-  const CollisionGeometry& geometry = topology.collision;
   TrianglePairHits hits;
   const auto intersectedAtStart = [&](Index t, Index u) {
     return geometry.trianglesCross(motion.start, t, u, hits);
@@ -206,8 +205,9 @@ void CollisionDetector::dropTangledContacts(const SceneTopology& topology,
   });
 }
 
-void CollisionDetector::findContacts(const SceneTopology& topology, const SubstepMotion& motion) {
-  const CollisionGeometry& geometry = topology.collision;
+void CollisionDetector::findContacts(const SceneTopology& topology,
+                                     const CollisionGeometry& geometry,
+                                     const SubstepMotion& motion) {
   // Per pair, both tests at once: the multi-pass test on the two triangles (edge contacts), and
   // every free particle of one triangle against the other (particle contacts). Both start from
   // the triangles' normals and the sides of each one's corners of the other's plane, computed
@@ -290,7 +290,7 @@ void CollisionDetector::findContacts(const SceneTopology& topology, const Subste
   const auto byParticleTriangle = [](const ParticleContact& a, const ParticleContact& b) {
     return a.particle != b.particle ? a.particle < b.particle : a.triangle < b.triangle;
   };
-  if (!setAside_.empty()) dropTangledContacts(topology, motion);
+  if (!setAside_.empty()) dropTangledContacts(topology, geometry, motion);
   // Each (particle, triangle) was tested from one pair only, so the hits are unique already.
   std::sort(particleContacts_.begin(), particleContacts_.end(), byParticleTriangle);
   // Hits are sorted by particle, so each particle's contacts are adjacent; within one

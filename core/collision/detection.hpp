@@ -13,11 +13,11 @@
 #include <span>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
+#include "core/broad_phase/pair_cache.hpp"
 #include "core/collision/geometry.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/line_triangle.hpp"
-#include "core/collision/pair_cache.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/parallel.hpp"
 #include "core/scene/scene_setup.hpp"
@@ -25,6 +25,7 @@
 
 namespace softbake {
 
+struct CollisionGeometry;
 struct SceneTopology;
 struct SubstepMotion;
 
@@ -50,8 +51,8 @@ class CollisionDetector {
   /// Finds the contacts of the substep that just moved the particles of `topology` from
   /// motion.start to motion.end: refreshes the triangle boxes, runs the broad phase, then the
   /// narrow phase. `clock`, when given, gets a Boxes, a BroadPhase and a NarrowPhase lap.
-  void detect(const SceneTopology& topology, const SubstepMotion& motion,
-              StageClock* clock = nullptr);
+  void detect(const SceneTopology& topology, const CollisionGeometry& geometry,
+              const SubstepMotion& motion, StageClock* clock = nullptr);
 
   /// Under initial_overlap "ignore": two surfaces (or one with itself) that intersected at the
   /// start never collide with each other; every other pair of surfaces still does.
@@ -100,11 +101,13 @@ class CollisionDetector {
   std::span<const std::uint8_t> flatPatches() const { return patchFlat_; }
 
  private:
-  void findContacts(const SceneTopology& topology, const SubstepMotion& motion);
+  void findContacts(const SceneTopology& topology, const CollisionGeometry& geometry,
+                    const SubstepMotion& motion);
   /// Where pairs are set aside, the overlap may slide as the bodies deform: a contact whose
   /// triangles (a particle's, for a particle contact) intersected at the substep's start is part
   /// of it, and left alone like the pairs set aside.
-  void dropTangledContacts(const SceneTopology& topology, const SubstepMotion& motion);
+  void dropTangledContacts(const SceneTopology& topology, const CollisionGeometry& geometry,
+                           const SubstepMotion& motion);
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of

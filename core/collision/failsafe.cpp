@@ -70,12 +70,12 @@ double failsafeSkin(const SceneTopology& topology) {
 
 }  // namespace
 
-CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology, FailsafePasses passes)
+CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
+                                     const CollisionGeometry& geometry, FailsafePasses passes)
     : passes_(passes),
       tolerance_(kToleranceOfSkin * failsafeSkin(topology)),
       separation_(kSeparationOfSkin * failsafeSkin(topology)),
       broadPhase_(makeBroadPhase(BroadPhaseKind::Bvh)) {
-  const CollisionGeometry& geometry = topology.collision;
   thickness_.assign(geometry.surfaces.size(), 0.0);
   margin_ = tolerance_;
   for (std::size_t b = 0; b < topology.bodies.size(); ++b)
@@ -137,16 +137,17 @@ void CollisionFailsafe::leaveTangled(const InitialOverlaps& overlaps) {
     tangled_.emplace_back(overlap.firstSurface, overlap.secondSurface);
 }
 
-FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology, CollisionDetector& detector,
-                                       std::span<const Vec3> start, SimulationState& state,
-                                       double dt) {
+FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
+                                       const CollisionGeometry& geometry,
+                                       CollisionDetector& detector, std::span<const Vec3> start,
+                                       SimulationState& state, double dt) {
   FailsafeStats stats;
   std::fill(moved_.begin(), moved_.end(), 0);
   std::fill(onPlane_.begin(), onPlane_.end(), 0);
   const int passes = passes_.impulses + passes_.zones;
   for (int pass = 0; pass <= passes; ++pass) {
     ++stats.passes;
-    const bool found = findImpacts(topology, detector, start, state.position, pass > 0);
+    const bool found = findImpacts(topology, geometry, detector, start, state.position, pass > 0);
     std::fill(moved_.begin(), moved_.end(), 0);
     if (!found) break;
     stats.impacts += impacts_.size();
@@ -157,10 +158,10 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology, CollisionD
       std::fill(state.velocity.begin(), state.velocity.end(), Vec3::Zero());
       ++stats.frozen;
     } else if (pass < passes_.impulses) {
-      applyImpulses(topology, state);
+      applyImpulses(topology, geometry, state);
     } else {
-      stats.zoneParticles =
-          moveZones(topology, start, state, pass >= passes_.impulses + passes_.translatingZones);
+      stats.zoneParticles = moveZones(topology, geometry, start, state,
+                                      pass >= passes_.impulses + passes_.translatingZones);
     }
     keepAbovePlanes(topology, state, dt);
   }
@@ -168,13 +169,13 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology, CollisionD
   return stats;
 }
 
-bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDetector& detector,
+bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
+                                    const CollisionGeometry& geometry, CollisionDetector& detector,
                                     std::span<const Vec3> start, std::span<const Vec3> end,
                                     bool onlyMoved) {
-  const CollisionGeometry& geometry = topology.collision;
   // The box of each vertex's path, grown by the tolerance: the triangles' boxes are made of them,
   // and most primitives of a candidate pair are rejected by these before any cubic is formed.
-  updateCollisionBoxes(topology, {start, end}, boxes_, Scalar(margin_), pathBoxes_);
+  updateCollisionBoxes(topology, geometry, {start, end}, boxes_, Scalar(margin_), pathBoxes_);
   // The detector's cached pairs hold this stage's almost always: the response moves particles
   // far less than the cache's margin, and the few triangles it moves out are found again there.
   // Its own broad phase only when the detector keeps no cache.
@@ -284,16 +285,16 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology, CollisionDete
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
   std::erase_if(impacts_, [&](const FailsafeImpact& impact) {
-    return (closeAtRest(topology, impact) &&
+    return (closeAtRest(topology, geometry, impact) &&
             !crosses(geometry, start, end, impact, impact.separation)) ||
-           notClosing(geometry, start, end, impact) || intersectedAtStart(topology, start, impact);
+           notClosing(geometry, start, end, impact) || intersectedAtStart(geometry, start, impact);
   });
   return !impacts_.empty();
 }
 
 bool CollisionFailsafe::closeAtRest(const SceneTopology& topology,
+                                    const CollisionGeometry& geometry,
                                     const FailsafeImpact& impact) const {
-  const CollisionGeometry& geometry = topology.collision;
   std::array<Vec3d, 4> rest;
   for (int k = 0; k < 4; ++k)
     rest[k] = geometry.vertex(topology.restPosition, impact.vertex[k]).cast<double>();
@@ -350,10 +351,9 @@ bool CollisionFailsafe::notClosing(const CollisionGeometry& geometry, std::span<
          std::abs(after) >= std::abs(before) - kRoundingOfSeparation * impact.separation;
 }
 
-bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
+bool CollisionFailsafe::intersectedAtStart(const CollisionGeometry& geometry,
                                            std::span<const Vec3> start,
                                            const FailsafeImpact& impact) const {
-  const CollisionGeometry& geometry = topology.collision;
   const auto around = [&](Index v) {
     return std::span(vertexTriangles_)
         .subspan(vertexTriangleStart_[v], vertexTriangleStart_[v + 1] - vertexTriangleStart_[v]);
@@ -375,8 +375,8 @@ bool CollisionFailsafe::intersectedAtStart(const SceneTopology& topology,
   return false;
 }
 
-void CollisionFailsafe::applyImpulses(const SceneTopology& topology, SimulationState& state) {
-  const CollisionGeometry& geometry = topology.collision;
+void CollisionFailsafe::applyImpulses(const SceneTopology& topology,
+                                      const CollisionGeometry& geometry, SimulationState& state) {
   const Index particles = geometry.particleCount;
   for (const FailsafeImpact& meeting : impacts_) {
     const Vec3d& normal = meeting.impact.normal;
@@ -443,9 +443,11 @@ Index CollisionFailsafe::zoneOf(Index v) {
   return v;
 }
 
-std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology, std::span<const Vec3> start,
-                                         SimulationState& state, bool stayAtStart) {
-  const Index particles = topology.collision.particleCount;
+std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
+                                         const CollisionGeometry& geometry,
+                                         std::span<const Vec3> start, SimulationState& state,
+                                         bool stayAtStart) {
+  const Index particles = geometry.particleCount;
   const auto join = [&](Index v) {
     if (!inZone_[v]) {
       inZone_[v] = 1;

@@ -57,10 +57,10 @@
 #include <span>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
+#include "core/broad_phase/pair_cache.hpp"
 #include "core/collision/continuous_collision.hpp"
 #include "core/collision/initial_overlap.hpp"
-#include "core/collision/pair_cache.hpp"
 #include "core/parallel.hpp"
 #include "core/types.hpp"
 
@@ -111,12 +111,14 @@ struct FailsafePasses {
 
 class CollisionFailsafe {
  public:
-  explicit CollisionFailsafe(const SceneTopology& topology, FailsafePasses passes = {});
+  explicit CollisionFailsafe(const SceneTopology& topology, const CollisionGeometry& geometry,
+                             FailsafePasses passes = {});
 
   /// Corrects state (positions and velocities) so that no eligible triangles meet on the way from
   /// `start`, with `dt` the substep. `detector` supplies the surface pairs to ignore.
-  FailsafeStats apply(const SceneTopology& topology, CollisionDetector& detector,
-                      std::span<const Vec3> start, SimulationState& state, double dt);
+  FailsafeStats apply(const SceneTopology& topology, const CollisionGeometry& geometry,
+                      CollisionDetector& detector, std::span<const Vec3> start,
+                      SimulationState& state, double dt);
 
   /// The surfaces (pairs, or one with itself) that `overlaps` found intersecting now: this stage
   /// leaves them to the response until the next call, which names those still tangled.
@@ -129,14 +131,16 @@ class CollisionFailsafe {
   double tolerance() const { return tolerance_; }
 
  private:
-  bool findImpacts(const SceneTopology& topology, CollisionDetector& detector,
-                   std::span<const Vec3> start, std::span<const Vec3> end, bool onlyMoved);
-  bool intersectedAtStart(const SceneTopology& topology, std::span<const Vec3> start,
+  bool findImpacts(const SceneTopology& topology, const CollisionGeometry& geometry,
+                   CollisionDetector& detector, std::span<const Vec3> start,
+                   std::span<const Vec3> end, bool onlyMoved);
+  bool intersectedAtStart(const CollisionGeometry& geometry, std::span<const Vec3> start,
                           const FailsafeImpact& impact) const;
   /// Whether the meeting's primitives were closer than its separation in the scene's initial
   /// state: a mesh finer than the skin, a part thinner than it, parts of an assembly fitted tighter
   /// than it were made that close.
-  bool closeAtRest(const SceneTopology& topology, const FailsafeImpact& impact) const;
+  bool closeAtRest(const SceneTopology& topology, const CollisionGeometry& geometry,
+                   const FailsafeImpact& impact) const;
   /// Whether the meeting's first primitive ends the substep more than `tolerance` on the other
   /// side of the second.
   static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
@@ -146,12 +150,13 @@ class CollisionFailsafe {
   /// further apart than the start, where a zone that stays puts them.
   static bool notClosing(const CollisionGeometry& geometry, std::span<const Vec3> start,
                          std::span<const Vec3> end, const FailsafeImpact& impact);
-  void applyImpulses(const SceneTopology& topology, SimulationState& state);
+  void applyImpulses(const SceneTopology& topology, const CollisionGeometry& geometry,
+                     SimulationState& state);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
   /// in zones.
-  std::size_t moveZones(const SceneTopology& topology, std::span<const Vec3> start,
-                        SimulationState& state, bool stayAtStart);
+  std::size_t moveZones(const SceneTopology& topology, const CollisionGeometry& geometry,
+                        std::span<const Vec3> start, SimulationState& state, bool stayAtStart);
   Index zoneOf(Index v);
   void clearZones();
 

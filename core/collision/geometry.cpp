@@ -5,8 +5,6 @@
 
 #include <algorithm>
 
-#include "core/mesh/mesh_topology.hpp"
-#include "core/mesh/weld.hpp"
 #include "core/parallel.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
@@ -22,24 +20,18 @@ Box3 inflated(Box3 box, Scalar by) {
 }
 
 /// Appends a static mesh collider as a surface of its own.
-void addStaticMesh(CollisionGeometry& geometry, const StaticMeshCollider& collider) {
-  // Welded so that neighbouring triangles share vertices: the broad phases skip pairs that
-  // share one, and closedness (an inside to push out of) needs the connectivity.
-  WeldedMesh welded = weldByPosition(collider.mesh.positions, collider.mesh.triangles);
-  bool closed = buildTopology(welded.triangles).closed();
-  const double volume = closed ? signedVolume(welded.positions, welded.triangles) : 0.0;
-  if (volume < 0)  // wound inside-out: normals must point out for the edge pushes
-    for (Triangle& t : welded.triangles) std::swap(t[1], t[2]);
-  closed = closed && volume != 0;
+void addStaticMesh(CollisionGeometry& geometry, const StaticShape& shape,
+                   const StaticMeshCollider& collider) {
   const Index firstVertex = geometry.particleCount + Index(geometry.staticVertex.size());
   const Index surface = Index(geometry.surfaces.size());
   geometry.surfaces.push_back(
-      {Index(geometry.triangleVertices.size()), Index(welded.triangles.size()), false, false});
+      {Index(geometry.triangleVertices.size()), Index(shape.triangles.size()), false, false});
   geometry.restitution.push_back(collider.restitution);
   geometry.friction.push_back(collider.friction);
-  geometry.surfaceClosed.push_back(closed);
-  for (const Vec3f& p : welded.positions) geometry.staticVertex.push_back(p.cast<Scalar>());
-  for (const Triangle& t : welded.triangles) {
+  geometry.surfaceClosed.push_back(shape.closed);
+  geometry.staticVertex.insert(geometry.staticVertex.end(), shape.positions.begin(),
+                               shape.positions.end());
+  for (const Triangle& t : shape.triangles) {
     geometry.triangleVertices.push_back(
         {t[0] + firstVertex, t[1] + firstVertex, t[2] + firstVertex});
     geometry.triangleSurface.push_back(surface);
@@ -63,8 +55,8 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
   for (std::size_t b = 0; b < topology.bodies.size(); ++b)
     geometry.triangleSurface.insert(geometry.triangleSurface.end(),
                                     topology.bodies[b].triangleCount, Index(b));
-  for (const StaticMeshCollider& collider : topology.staticMeshes)
-    addStaticMesh(geometry, collider);
+  for (std::size_t s = 0; s < topology.staticShapes.size(); ++s)
+    addStaticMesh(geometry, topology.staticShapes[s], topology.staticMeshes[s]);
   geometry.selfPatches = buildSelfPatches(geometry);
   return geometry;
 }
@@ -80,21 +72,20 @@ void dropSurfacePairs(const CollisionGeometry& geometry,
   });
 }
 
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes) {
-  updateCollisionBoxes(topology, motion, boxes, topology.settings.skin);
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes) {
+  updateCollisionBoxes(topology, geometry, motion, boxes, topology.settings.skin);
 }
 
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes, Scalar margin) {
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes, Scalar margin) {
   std::vector<Box3> particleBoxes;
-  updateCollisionBoxes(topology, motion, boxes, margin, particleBoxes);
+  updateCollisionBoxes(topology, geometry, motion, boxes, margin, particleBoxes);
 }
 
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes, Scalar margin,
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes, Scalar margin,
                           std::vector<Box3>& particleBoxes) {
-  const CollisionGeometry& geometry = topology.collision;
   if (boxes.size() != geometry.triangleVertices.size()) {
     boxes.resize(geometry.triangleVertices.size());
     for (std::size_t t = geometry.softTriangleCount; t < boxes.size(); ++t) {

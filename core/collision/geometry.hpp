@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/collision/self_patches.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_setup.hpp"
@@ -69,27 +69,28 @@ void dropSurfacePairs(const CollisionGeometry& geometry,
                       std::span<const std::pair<Index, Index>> surfacePairs,
                       std::vector<TrianglePair>& pairs);
 
-/// The collision geometry of the topology's bodies and static mesh colliders (welded, so
-/// triangles that touch share vertices). Called by buildSceneTopology().
+/// The collision geometry of the topology's bodies and static shapes (welded by
+/// buildSceneTopology(), so triangles that touch share vertices). Built by the Simulator, which
+/// holds it for its collision stages.
 CollisionGeometry buildCollisionGeometry(const SceneTopology& topology);
 
 /// Refreshes `boxes`, one per collision triangle: each soft triangle's box covers its corners at
 /// the start and the end of the substep, so it holds every particle's segment of the step,
 /// inflated by the skin so resting contacts stay candidates. Static triangles' boxes are computed
 /// when `boxes` does not have the right size yet, and kept after that.
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes);
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes);
 /// The same, inflated by `margin` instead of the skin (a box is grown by a margin only once: the
 /// static triangles' boxes keep the margin of the first call).
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes, Scalar margin);
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes, Scalar margin);
 /// The same, through `particleBoxes`, which receives each particle's box over its segment of the
 /// substep, inflated by `margin`: a soft triangle's box is the union of its corners' (the same box
 /// to the bit, as rounding is monotonic, so inflating commutes with min and max), and each
 /// position is read once instead of once per triangle around it. The per-step callers keep
 /// `particleBoxes`, so no step allocates.
-void updateCollisionBoxes(const SceneTopology& topology, const SubstepMotion& motion,
-                          std::vector<Box3>& boxes, Scalar margin,
+void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry& geometry,
+                          const SubstepMotion& motion, std::vector<Box3>& boxes, Scalar margin,
                           std::vector<Box3>& particleBoxes);
 
 }  // namespace softbake

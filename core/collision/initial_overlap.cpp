@@ -7,8 +7,8 @@
 #include <map>
 
 #include "core/collision/continuous_collision.hpp"
+#include "core/collision/geometry.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
-#include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -32,14 +32,14 @@ void keepPairs(std::span<const TrianglePair> from, std::vector<TrianglePair>& ou
 }
 }  // namespace
 
-InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions,
-                                    Scalar closeDistance) {
-  const CollisionGeometry& geometry = topology.collision;
+InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
+                                    const CollisionGeometry& geometry,
+                                    std::span<const Vec3> positions, Scalar closeDistance) {
   InitialOverlaps overlaps;
   if (geometry.triangleVertices.empty()) return overlaps;
   // Boxes of a substep that does not move: each triangle's box around its corners.
   std::vector<Box3> boxes;
-  updateCollisionBoxes(topology, {positions, positions}, boxes,
+  updateCollisionBoxes(topology, geometry, {positions, positions}, boxes,
                        std::max(topology.settings.skin, closeDistance));
   std::vector<CollisionSurface> allSelfColliding = geometry.surfaces;
   for (CollisionSurface& surface : allSelfColliding) surface.selfCollision = surface.moving;
@@ -49,7 +49,7 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<con
   makeBroadPhase(BroadPhaseKind::Bvh)->findPairs(input, candidates);
 
   std::sort(candidates.begin(), candidates.end());
-  stillIntersecting(topology, positions, candidates, overlaps.pairs);
+  stillIntersecting(geometry, positions, candidates, overlaps.pairs);
   std::map<std::pair<Index, Index>, std::size_t> bySurfaces;
   for (const TrianglePair& pair : overlaps.pairs)
     ++bySurfaces[{geometry.triangleSurface[pair.first], geometry.triangleSurface[pair.second]}];
@@ -59,15 +59,14 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<con
     std::erase_if(candidates, [&](const TrianglePair& pair) {
       return geometry.triangleSurface[pair.first] == geometry.triangleSurface[pair.second];
     });
-    stillClose(topology, positions, candidates, closeDistance, overlaps.close);
+    stillClose(geometry, positions, candidates, closeDistance, overlaps.close);
   }
   return overlaps;
 }
 
-void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
+void stillClose(const CollisionGeometry& geometry, std::span<const Vec3> positions,
                 std::span<const TrianglePair> from, Scalar distance,
                 std::vector<TrianglePair>& out) {
-  const CollisionGeometry& geometry = topology.collision;
   const auto corners = [&](Index t) {
     const TriangleCorners c = geometry.corners(positions, t);
     return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
@@ -78,33 +77,11 @@ void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
   });
 }
 
-void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
+void stillIntersecting(const CollisionGeometry& geometry, std::span<const Vec3> positions,
                        std::span<const TrianglePair> from, std::vector<TrianglePair>& out) {
-  const CollisionGeometry& geometry = topology.collision;
   keepPairs(from, out, [&](const TrianglePair& pair, TrianglePairHits& hits) {
     return geometry.trianglesCross(positions, pair.first, pair.second, hits);
   });
-}
-
-std::string_view initialOverlapModeName(InitialOverlapMode mode) {
-  switch (mode) {
-    case InitialOverlapMode::SetAside:
-      return "set_aside";
-    case InitialOverlapMode::Separate:
-      return "separate";
-    case InitialOverlapMode::Ignore:
-      return "ignore";
-  }
-  return "set_aside";
-}
-
-std::vector<std::string> initialOverlapModeNames() {
-  return namesOf(std::span<const InitialOverlapMode>(kInitialOverlapModes), initialOverlapModeName);
-}
-
-bool parseInitialOverlapMode(std::string_view name, InitialOverlapMode& mode) {
-  return parseNamed(name, std::span<const InitialOverlapMode>(kInitialOverlapModes),
-                    initialOverlapModeName, mode);
 }
 
 }  // namespace softbake

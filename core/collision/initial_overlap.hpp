@@ -32,11 +32,12 @@
 #include <string_view>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 
 namespace softbake {
 
+struct CollisionGeometry;
 struct SceneTopology;
 
 /// Intersecting triangle pairs between two surfaces, or within one (first == second).
@@ -56,23 +57,19 @@ struct InitialOverlaps {
 
 /// The triangle pairs of `topology` that intersect with its particles at `positions`, and those of
 /// different surfaces closer than `closeDistance` (none when it is 0).
-InitialOverlaps findInitialOverlaps(const SceneTopology& topology, std::span<const Vec3> positions,
-                                    Scalar closeDistance = 0);
+InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
+                                    const CollisionGeometry& geometry,
+                                    std::span<const Vec3> positions, Scalar closeDistance = 0);
 
 /// The pairs of `from` (sorted) whose triangles are closer than `distance` with the particles at
 /// `positions` and do not intersect, in order, into `out`.
-void stillClose(const SceneTopology& topology, std::span<const Vec3> positions,
+void stillClose(const CollisionGeometry& geometry, std::span<const Vec3> positions,
                 std::span<const TrianglePair> from, Scalar distance,
                 std::vector<TrianglePair>& out);
 
 /// The pairs of `from` (sorted) whose triangles intersect with the particles at `positions`, in
 /// order, into `out`.
-void stillIntersecting(const SceneTopology& topology, std::span<const Vec3> positions,
+void stillIntersecting(const CollisionGeometry& geometry, std::span<const Vec3> positions,
                        std::span<const TrianglePair> from, std::vector<TrianglePair>& out);
-
-/// "set_aside", "separate", "ignore".
-std::string_view initialOverlapModeName(InitialOverlapMode mode);
-std::vector<std::string> initialOverlapModeNames();
-bool parseInitialOverlapMode(std::string_view name, InitialOverlapMode& mode);
 
 }  // namespace softbake

@@ -23,8 +23,6 @@ std::size_t resolvePlaneContacts(const SceneTopology& topology, std::span<const 
                                  SimulationState& state, bool respond = true,
                                  std::span<std::int32_t> touchedPlane = {});
 
-inline constexpr std::int32_t kNoPlane = -1;
-
 /// Appends to `contacts` one ContactKind::Plane contact for every particle in contact with a plane
 /// now: at the point of the plane under it, with the plane's normal, in particle order (so the
 /// list is the same for any thread count). In contact means within the skin (with `respond`: the
@@ -32,16 +30,5 @@ inline constexpr std::int32_t kNoPlane = -1;
 /// above), or behind the plane without response (what the detector found, the paper's figure 5b).
 void appendPlaneContacts(const SceneTopology& topology, const SimulationState& state, bool respond,
                          std::vector<Contact>& contacts);
-
-/// How far `x` lies above `plane`, along its normal (negative behind it).
-inline Scalar heightAbove(const PlaneCollider& plane, const Vec3& x) {
-  return plane.normal.dot(x - plane.point);
-}
-
-/// Whether a particle at `x` is in contact with `plane`: closer than the skin, or behind it. The
-/// one rule for the plane pass and for the implicit step's holds (core/dynamics/contact_holds).
-inline bool touchesPlane(const PlaneCollider& plane, Scalar skin, const Vec3& x) {
-  return heightAbove(plane, x) < skin;
-}
 
 }  // namespace softbake

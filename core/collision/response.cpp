@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 
-#include "core/enum_names.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -16,7 +15,7 @@ namespace {
 struct ResponseScene {
   const SceneTopology& topology;
   SimulationState& state;
-  const CollisionGeometry& geometry = topology.collision;
+  const CollisionGeometry& geometry;
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
   std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
@@ -132,26 +131,6 @@ Vec3 closestPointOnPlaneIntersection(const Vec3& n1, const Vec3& p1, const Vec3&
 }
 
 }  // namespace
-
-std::string_view responseModeName(ResponseMode mode) {
-  switch (mode) {
-    case ResponseMode::TwoSided:
-      return "two-sided";
-    case ResponseMode::Paper:
-      return "paper";
-    case ResponseMode::None:
-      return "none";
-  }
-  return "two-sided";
-}
-
-std::vector<std::string> responseModeNames() {
-  return namesOf(std::span<const ResponseMode>(kResponseModes), responseModeName);
-}
-
-bool parseResponseMode(std::string_view name, ResponseMode& mode) {
-  return parseNamed(name, std::span<const ResponseMode>(kResponseModes), responseModeName, mode);
-}
 
 namespace {
 
@@ -303,12 +282,12 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
 }
 
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
+                                           const CollisionGeometry& geometry,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
                                            EdgePushes& edgePushes,
                                            std::span<const std::pair<Index, Index>> leaveAlone) {
-  const ResponseScene scene{topology, state, topology.collision, topology.settings.skin,
-                            leaveAlone};
+  const ResponseScene scene{topology, state, geometry, topology.settings.skin, leaveAlone};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

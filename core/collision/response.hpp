@@ -42,6 +42,7 @@
 
 namespace softbake {
 
+struct CollisionGeometry;
 struct SceneTopology;
 struct SimulationState;
 
@@ -127,8 +128,9 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
 /// between the surface pairs of `leaveAlone` (sorted, lower surface first) are recorded but not
 /// responded to: surfaces that start inside each other, which the Detangler takes apart.
 CollisionResponseStats respondToCollisions(
-    const SceneTopology& topology, const CollisionDetector& detector, ResponseMode mode,
-    SimulationState& state, std::vector<Contact>& contacts, EdgePushes& edgePushes,
+    const SceneTopology& topology, const CollisionGeometry& geometry,
+    const CollisionDetector& detector, ResponseMode mode, SimulationState& state,
+    std::vector<Contact>& contacts, EdgePushes& edgePushes,
     std::span<const std::pair<Index, Index>> leaveAlone = {});
 
 }  // namespace softbake

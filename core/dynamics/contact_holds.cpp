@@ -5,7 +5,6 @@
 
 #include <functional>
 
-#include "core/collision/plane_contact.hpp"
 #include "core/dynamics/for_each_particle.hpp"
 
 namespace softbake {

@@ -5,7 +5,6 @@
 
 #include <atomic>
 
-#include "core/enum_names.hpp"
 #include "core/mesh/weld.hpp"
 #include "core/parallel.hpp"
 
@@ -37,26 +36,6 @@ bool integrate(const SceneTopology& topology, const ForceBuffers& forces, Scalar
                       if (chunkRunaway) runaway.store(true, std::memory_order_relaxed);
                     });
   return !runaway.load();
-}
-
-std::string_view integratorName(IntegratorKind kind) {
-  switch (kind) {
-    case IntegratorKind::Implicit:
-      return "implicit";
-    case IntegratorKind::Xpbd:
-      return "xpbd";
-    case IntegratorKind::Explicit:
-      break;
-  }
-  return "explicit";
-}
-
-std::vector<std::string> integratorNames() {
-  return namesOf(std::span<const IntegratorKind>(kIntegratorKinds), integratorName);
-}
-
-bool parseIntegrator(std::string_view name, IntegratorKind& kind) {
-  return parseNamed(name, std::span<const IntegratorKind>(kIntegratorKinds), integratorName, kind);
 }
 
 Index findRunawayParticle(const SceneTopology& topology, const SimulationState& state) {

@@ -14,6 +14,19 @@ namespace softbake {
 
 namespace {
 
+StaticShape staticShape(const StaticMeshCollider& collider) {
+  WeldedMesh welded = weldByPosition(collider.mesh.positions, collider.mesh.triangles);
+  bool closed = buildTopology(welded.triangles).closed();
+  const double volume = closed ? signedVolume(welded.positions, welded.triangles) : 0.0;
+  if (volume < 0)  // wound inside-out: normals must point out for the edge pushes
+    for (Triangle& t : welded.triangles) std::swap(t[1], t[2]);
+  StaticShape shape;
+  shape.closed = closed && volume != 0;
+  for (const Vec3f& p : welded.positions) shape.positions.push_back(p.cast<Scalar>());
+  shape.triangles = std::move(welded.triangles);
+  return shape;
+}
+
 // Triangles per volume chunk: big enough to amortise a task, small enough to split 10k faces.
 constexpr Index kVolumeChunk = 2048;
 
@@ -271,8 +284,17 @@ SceneTopology buildSceneTopology(const SceneSetup& setup, BuildReport* report) {
         for (Index v : scene.triangles[t]) emit(v, Index(t));
       },
       scene.triangleRowStart, scene.triangleRefs);
-  scene.collision = buildCollisionGeometry(scene);
+  for (const StaticMeshCollider& collider : scene.staticMeshes)
+    scene.staticShapes.push_back(staticShape(collider));
   return scene;
+}
+
+Index SceneTopology::surfaceFirstTriangle(Index surface) const {
+  if (surface < bodies.size()) return bodies[surface].firstTriangle;
+  Index first = Index(triangles.size());
+  for (Index s = 0; s < surface - bodies.size(); ++s)
+    first += Index(staticShapes[s].triangles.size());
+  return first;
 }
 
 void computeBodyNormals(const SceneTopology& topology, std::span<const Vec3> positions,

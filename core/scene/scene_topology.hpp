@@ -14,8 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "core/collision/contact.hpp"
-#include "core/collision/geometry.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/types.hpp"
 
@@ -52,6 +50,15 @@ struct Body {
   RenderMesh render;
 };
 
+/// A static mesh collider as the collision stages see it: welded, so that triangles which touch
+/// share vertices (the broad phases skip pairs that share one, and an inside to push out of needs
+/// the connectivity), and wound with its normals out where it is closed.
+struct StaticShape {
+  std::vector<Vec3> positions;
+  std::vector<Triangle> triangles;
+  bool closed = false;  ///< closed, consistently wound and of non-zero volume
+};
+
 /// A run of triangles of one body: the unit of the deterministic volume reduction.
 struct TriangleChunk {
   Index body, begin, end;
@@ -79,18 +86,18 @@ struct SceneTopology {
   std::vector<Index> triangleRowStart, triangleRefs;
   std::vector<TriangleChunk> volumeChunks;
 
-  CollisionGeometry collision;  ///< soft and static triangles for the collision pipeline
+  std::vector<StaticShape> staticShapes;  ///< per static mesh collider
 
   std::size_t particleCount() const { return mass.size(); }
-  /// The name of collision surface `surface`: the bodies come first, then the static meshes.
+  /// Collision surfaces number the bodies first, then the static meshes, and their triangles
+  /// likewise: each body's at the same indices as in `triangles`, then each static shape's.
+  std::size_t surfaceCount() const { return bodies.size() + staticShapes.size(); }
+  /// The first collision triangle of `surface`.
+  Index surfaceFirstTriangle(Index surface) const;
+  /// The name of collision surface `surface`.
   const std::string& surfaceName(Index surface) const {
     return surface < bodies.size() ? bodies[surface].name
                                    : staticMeshes[surface - bodies.size()].name;
-  }
-  /// What surface A of `contact` met: a collision surface's name, or a plane's.
-  const std::string& partnerName(const Contact& contact) const {
-    return contact.kind == ContactKind::Plane ? planes[contact.surfaceB].name
-                                              : surfaceName(contact.surfaceB);
   }
   /// The body's triangles, in global particle indices.
   std::span<const Triangle> bodyTriangles(const Body& body) const {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "core/dynamics/energy.hpp"
-#include "core/dynamics/material.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/simulator.hpp"
 #include "importers/scene_file.hpp"
 #include "tests/support/dropped_pair.hpp"
@@ -88,7 +88,7 @@ TEST_P(ExampleContacts, ContactsHoldOnEveryFrame) {
   for (int frame = 2; frame <= file.setup.settings.frames; ++frame) {
     simulator.advanceToFrame(frame);
     contacts += simulator.lastFrameStats().contacts + simulator.lastFrameStats().planeContacts;
-    const CollisionGeometry& geometry = simulator.topology().collision;
+    const CollisionGeometry& geometry = simulator.collision();
     const test::IntersectionCount count =
         test::countIntersectingPairs(geometry, simulator.state().position);
     apart = apart || forbiddenPairs(count, geometry) == 0;
@@ -213,7 +213,7 @@ TEST_P(HeavyOnLight, LandsOnTheGroundWithoutIntersecting) {
     simulator.advanceToFrame(frame);
     planeContacts += simulator.lastFrameStats().planeContacts;
     const test::IntersectionCount count =
-        test::countIntersectingPairs(simulator.topology().collision, simulator.state().position);
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position);
     ASSERT_EQ(count.betweenSurfaces, 0u) << "frame " << frame << ":" << describe(count);
     ASSERT_LE(computeEnergy(simulator.topology(), simulator.state()).total(),
               start + 1e-3 * std::abs(start))

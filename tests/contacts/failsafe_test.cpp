@@ -9,7 +9,7 @@
 #include <cstring>
 
 #include "core/collision/detection.hpp"
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "tests/core/test_worlds.hpp"
 #include "tests/support/intersection_checker.hpp"
 #include "tests/support/point_triangle_distance.hpp"
@@ -57,7 +57,7 @@ struct Substep {
           FailsafePasses passes = {})
       : scene(buildSceneTopology(setup)),
         detector(scene.topology.settings.collisions),
-        failsafe(scene.topology, passes) {
+        failsafe(scene.topology, scene.collision, passes) {
     for (std::size_t b = 0; b < scene.topology.bodies.size(); ++b) {
       const Body& body = scene.topology.bodies[b];
       for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
@@ -68,10 +68,11 @@ struct Substep {
     }
   }
   FailsafeStats apply() {
-    return failsafe.apply(scene.topology, detector, scene.substepStart, scene.state, kDt);
+    return failsafe.apply(scene.topology, scene.collision, detector, scene.substepStart,
+                          scene.state, kDt);
   }
   test::IntersectionCount intersections() const {
-    return test::countIntersectingPairs(scene.topology.collision, scene.state.position);
+    return test::countIntersectingPairs(scene.collision, scene.state.position);
   }
   Vec3d momentum() const {
     Vec3d sum = Vec3d::Zero();
@@ -318,7 +319,8 @@ TEST(Failsafe, SurfacesIntersectingAtTheStartAreLeftToTheResponse) {
   SceneSetup setup = noGravity();
   setup.bodies = {ball("left", Vec3f(-0.25f, 0, 0)), ball("right", Vec3f(0.25f, 0, 0))};
   Substep step(setup, {Vec3(-0.01f, 0, 0), Vec3(0.01f, 0, 0)});
-  step.failsafe.leaveTangled(findInitialOverlaps(step.scene.topology, step.scene.substepStart));
+  step.failsafe.leaveTangled(
+      findInitialOverlaps(step.scene.topology, step.scene.collision, step.scene.substepStart));
   ASSERT_TRUE(step.failsafe.anyTangled());
   const std::vector<Vec3> moved = step.scene.state.position;
   const FailsafeStats stats = step.apply();

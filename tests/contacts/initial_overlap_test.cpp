@@ -106,9 +106,10 @@ Vec3d centroid(const SimulationState& state, const Body& body) {
 
 TEST(InitialOverlap, BodiesPlacedIntoEachOtherAreCountedAsTheExactCheckerCounts) {
   const SceneTopology topology = buildSceneTopology(twoBalls(0.8f));
-  const InitialOverlaps overlaps = findInitialOverlaps(topology, topology.restPosition);
+  const CollisionGeometry collision = buildCollisionGeometry(topology);
+  const InitialOverlaps overlaps = findInitialOverlaps(topology, collision, topology.restPosition);
   const test::IntersectionCount exact =
-      test::countIntersectingPairs(topology.collision, topology.restPosition);
+      test::countIntersectingPairs(collision, topology.restPosition);
   ASSERT_GT(exact.betweenSurfaces, 50u);
   ASSERT_EQ(overlaps.bySurfaces.size(), 1u);
   EXPECT_EQ(overlaps.bySurfaces[0].firstSurface, 0u);
@@ -118,7 +119,8 @@ TEST(InitialOverlap, BodiesPlacedIntoEachOtherAreCountedAsTheExactCheckerCounts)
   EXPECT_TRUE(std::is_sorted(overlaps.pairs.begin(), overlaps.pairs.end()));
 
   const SceneTopology apart = buildSceneTopology(twoBalls(1.2f));
-  EXPECT_TRUE(findInitialOverlaps(apart, apart.restPosition).empty());
+  EXPECT_TRUE(
+      findInitialOverlaps(apart, buildCollisionGeometry(apart), apart.restPosition).empty());
 }
 
 TEST(InitialOverlap, ABodyThatCrossesItselfIsReportedWithItself) {
@@ -126,9 +128,10 @@ TEST(InitialOverlap, ABodyThatCrossesItselfIsReportedWithItself) {
   // though a closed body does not collide with itself.
   const SceneSetup scene = selfCrossingBody(0.8f);
   const SceneTopology topology = buildSceneTopology(scene);
-  const InitialOverlaps overlaps = findInitialOverlaps(topology, topology.restPosition);
+  const CollisionGeometry collision = buildCollisionGeometry(topology);
+  const InitialOverlaps overlaps = findInitialOverlaps(topology, collision, topology.restPosition);
   const test::IntersectionCount exact =
-      test::countIntersectingPairs(topology.collision, topology.restPosition);
+      test::countIntersectingPairs(collision, topology.restPosition);
   ASSERT_EQ(overlaps.bySurfaces.size(), 1u);
   EXPECT_EQ(overlaps.bySurfaces[0].firstSurface, overlaps.bySurfaces[0].secondSurface);
   EXPECT_EQ(overlaps.pairs.size(), exact.pairs.size());
@@ -156,7 +159,7 @@ TEST(InitialOverlap, SeparateResolvesTheOverlapWithoutAVelocitySpike) {
     EXPECT_LE(computeEnergy(topology, simulator.state()).total(), start + 1e-6 * std::abs(start))
         << "frame " << frame;
     const std::size_t pairs =
-        test::countIntersectingPairs(topology.collision, simulator.state().position)
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position)
             .betweenSurfaces;
     if (pairs == 0 && apartFrom == 0) apartFrom = frame;
     if (apartFrom > 0) {
@@ -188,7 +191,7 @@ TEST(InitialOverlap, SeparateMovesABodyOutOfAStaticMesh) {
   ASSERT_FALSE(simulator.initialOverlaps().empty());
   const Vec3d start = centroid(simulator.state(), simulator.topology().bodies[0]);
   for (int frame = 2; frame <= 24; ++frame) simulator.advanceToFrame(frame);
-  EXPECT_EQ(test::countIntersectingPairs(simulator.topology().collision, simulator.state().position)
+  EXPECT_EQ(test::countIntersectingPairs(simulator.collision(), simulator.state().position)
                 .betweenSurfaces,
             0u);
   const Vec3d moved = centroid(simulator.state(), simulator.topology().bodies[0]) - start;
@@ -207,7 +210,7 @@ TEST(InitialOverlap, IgnoreGluesThePartsWhereTheyOverlap) {
   const Vec3d start = centroid(simulator.state(), simulator.topology().bodies[0]);
   for (int frame = 2; frame <= 24; ++frame) simulator.advanceToFrame(frame);
   EXPECT_EQ(simulator.lastFrameStats().contacts, 0u);
-  EXPECT_GT(test::countIntersectingPairs(simulator.topology().collision, simulator.state().position)
+  EXPECT_GT(test::countIntersectingPairs(simulator.collision(), simulator.state().position)
                 .betweenSurfaces,
             overlapping / 2)
       << "still overlapping";
@@ -230,7 +233,7 @@ TEST(InitialOverlap, IgnoreLeavesEveryOtherPairOfSurfacesColliding) {
     simulator.advanceToFrame(frame);
     contacts += simulator.lastFrameStats().contacts;
     test::IntersectionCount count =
-        test::countIntersectingPairs(simulator.topology().collision, simulator.state().position);
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position);
     EXPECT_EQ((count.bySurfaces[{0, 2}] + count.bySurfaces[{1, 2}]), 0u) << "frame " << frame;
   }
   EXPECT_GT(contacts, 100u);
@@ -249,7 +252,7 @@ TEST(InitialOverlap, SetAsideLeavesTheOverlapAloneWithoutMovingAnything) {
   const SceneTopology& topology = simulator.topology();
   const std::size_t initial = simulator.initialOverlaps().pairs.size();
   const std::size_t exactInitial =
-      test::countIntersectingPairs(topology.collision, simulator.state().position).pairs.size();
+      test::countIntersectingPairs(simulator.collision(), simulator.state().position).pairs.size();
   ASSERT_GT(initial, 50u);
   EXPECT_EQ(simulator.initiallySetAsidePairs(), initial);
   const double start = computeEnergy(topology, simulator.state()).total();
@@ -261,7 +264,7 @@ TEST(InitialOverlap, SetAsideLeavesTheOverlapAloneWithoutMovingAnything) {
     EXPECT_LE(computeEnergy(topology, simulator.state()).total(), start + 1e-6)
         << "frame " << frame;
     const test::IntersectionCount now =
-        test::countIntersectingPairs(topology.collision, simulator.state().position);
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position);
     EXPECT_LE(now.pairs.size(), exactInitial) << "the overlap grew at frame " << frame;
     EXPECT_LE(simulator.lastFrameStats().setAsidePairs, initial) << "frame " << frame;
   }
@@ -287,7 +290,7 @@ TEST(InitialOverlap, SetAsidePairsCollideOnceTheyHaveSeparated) {
   for (int frame = 2; frame <= 48; ++frame) {
     simulator.advanceToFrame(frame);
     const std::size_t pairs =
-        test::countIntersectingPairs(topology.collision, simulator.state().position)
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position)
             .betweenSurfaces;
     if (apartFrom == 0 && pairs == 0) apartFrom = frame;
     if (apartFrom > 0) {
@@ -315,13 +318,13 @@ TEST(InitialOverlap, ABodyThatCrossesItselfIsNeitherBlownUpNorTorn) {
   Simulator simulator(buildSceneTopology(scene));
   const SceneTopology& topology = simulator.topology();
   const std::size_t initial =
-      test::countIntersectingPairs(topology.collision, simulator.state().position).pairs.size();
+      test::countIntersectingPairs(simulator.collision(), simulator.state().position).pairs.size();
   ASSERT_GT(initial, 50u);
   for (int frame = 2; frame <= 48; ++frame) {
     ASSERT_NO_THROW(simulator.advanceToFrame(frame)) << "frame " << frame;
-    EXPECT_LE(
-        test::countIntersectingPairs(topology.collision, simulator.state().position).pairs.size(),
-        initial)
+    EXPECT_LE(test::countIntersectingPairs(simulator.collision(), simulator.state().position)
+                  .pairs.size(),
+              initial)
         << "the overlap grew at frame " << frame;
   }
   double worstStretch = 0;
@@ -361,7 +364,7 @@ TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
   ASSERT_GT(simulator.fittedPairs().size(), 100u) << "the blocks' faces are fitted";
   for (int frame = 2; frame <= 24; ++frame) {
     simulator.advanceToFrame(frame);
-    EXPECT_EQ(test::countIntersectingPairs(topology.collision, simulator.state().position)
+    EXPECT_EQ(test::countIntersectingPairs(simulator.collision(), simulator.state().position)
                   .betweenSurfaces,
               0u)
         << "frame " << frame;

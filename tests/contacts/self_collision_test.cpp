@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "core/broad_phase/pair_cache.hpp"
 #include "core/collision/geometry.hpp"
-#include "core/collision/pair_cache.hpp"
 #include "core/collision/self_patches.hpp"
-#include "core/dynamics/material.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/simulator.hpp"
 #include "importers/scene_file.hpp"
 #include "tests/core/test_worlds.hpp"
@@ -157,7 +157,7 @@ std::size_t mostPairsWithinABallPressedIntoTheGround(std::optional<bool> selfCol
   for (int frame = 2; frame <= scene.settings.frames; ++frame) {
     simulator.advanceToFrame(frame);
     const test::IntersectionCount count =
-        test::countIntersectingPairs(simulator.topology().collision, simulator.state().position);
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position);
     const auto within = count.bySurfaces.find({0, 0});
     most = std::max(most, within == count.bySurfaces.end() ? std::size_t(0) : within->second);
   }

@@ -1,9 +1,9 @@
 // Completeness of the broad phases: on random triangle soups and on deforming, overlapping
 // icospheres, every broad phase returns exactly brute force's pairs, and brute force returns
-// exactly what the definition in core/collision/broad_phase.hpp says.
+// exactly what the definition in core/broad_phase/broad_phase.hpp says.
 
-#include "core/collision/broad_phase.hpp"
-#include "core/collision/pair_cache.hpp"
+#include "core/broad_phase/broad_phase.hpp"
+#include "core/broad_phase/pair_cache.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -18,9 +18,9 @@
 #include <random>
 #include <string>
 
-#include "core/collision/bvh_broad_phase.hpp"
-#include "core/collision/sbhash_broad_phase.hpp"
-#include "core/collision/spatial_hash_broad_phase.hpp"
+#include "core/broad_phase/bvh.hpp"
+#include "core/broad_phase/sbhash.hpp"
+#include "core/broad_phase/spatial_hash.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/text.hpp"
 #include "tests/core/allocation_counter.hpp"

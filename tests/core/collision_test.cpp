@@ -60,10 +60,11 @@ std::vector<Contact> collideOnce(test::StagedScene& scene, const Vec3& end, cons
   scene.state.position[0] = end;
   scene.state.velocity[0] = velocity;
   CollisionDetector detector(scene.topology.settings.collisions);
-  detector.detect(scene.topology, {scene.substepStart, scene.state.position});
+  detector.detect(scene.topology, scene.collision, {scene.substepStart, scene.state.position});
   std::vector<Contact> contacts;
   EdgePushes edgePushes(scene.topology.particleCount());
-  respondToCollisions(scene.topology, detector, mode, scene.state, contacts, edgePushes);
+  respondToCollisions(scene.topology, scene.collision, detector, mode, scene.state, contacts,
+                      edgePushes);
   return contacts;
 }
 
@@ -151,8 +152,7 @@ TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCam
   scene.bodies.push_back(dart);
   test::StagedScene staged(buildSceneTopology(scene));
   const Index tip = 3;  // the dart's free corner: the sheet's three particles come first
-  ASSERT_TRUE(staged.topology.collision.surfaces.size() == 2 &&
-              !staged.topology.collision.surfaceClosed[0]);
+  ASSERT_TRUE(staged.collision.surfaces.size() == 2 && !staged.collision.surfaceClosed[0]);
   staged.substepStart = staged.state.position;
   staged.state.position[0] = Vec3(0, 0, 1);               // the sheet's corner 0 rises by 1
   staged.state.position[tip] = Vec3(0.25f, 0.25f, 0.2f);  // the tip rises by 0.1, less
@@ -165,15 +165,15 @@ TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCam
                                         staged.state.position[tip], staged.state.position[0],
                                         staged.state.position[1], staged.state.position[2], hit));
   CollisionDetector detector(staged.topology.settings.collisions);
-  detector.detect(staged.topology, {staged.substepStart, staged.state.position});
+  detector.detect(staged.topology, staged.collision, {staged.substepStart, staged.state.position});
   ASSERT_EQ(detector.particleContacts().size(), 1u);
   const ParticleContact& contact = detector.particleContacts()[0];
   EXPECT_EQ(contact.particle, tip);
   EXPECT_GT(contact.normal.z(), 0) << "the tip came from the side the sheet's normal points to";
   std::vector<Contact> contacts;
   EdgePushes edgePushes(staged.topology.particleCount());
-  respondToCollisions(staged.topology, detector, ResponseMode::TwoSided, staged.state, contacts,
-                      edgePushes);
+  respondToCollisions(staged.topology, staged.collision, detector, ResponseMode::TwoSided,
+                      staged.state, contacts, edgePushes);
   const std::vector<Vec3>& now = staged.state.position;
   const Vec3 normal = (now[1] - now[0]).cross(now[2] - now[0]).normalized();
   EXPECT_GT(normal.dot(now[tip] - now[0]), 0) << "back on its side of the sheet";
@@ -220,7 +220,7 @@ TEST(CollisionDetection, FindsExactlyTheCrossingsABruteForceScanFinds) {
     setup.bodies.push_back(body);
   }
   test::StagedScene scene(buildSceneTopology(setup));
-  const CollisionGeometry& geometry = scene.topology.collision;
+  const CollisionGeometry& geometry = scene.collision;
   ASSERT_TRUE(geometry.surfaceClosed[0] && geometry.surfaceClosed[1]);
   std::mt19937 random(7);
   std::uniform_real_distribution<float> jitter(-0.004f, 0.004f);
@@ -230,7 +230,7 @@ TEST(CollisionDetection, FindsExactlyTheCrossingsABruteForceScanFinds) {
         Vec3(towardTheOther + jitter(random), jitter(random), jitter(random));
   }
   CollisionDetector detector(scene.topology.settings.collisions);
-  detector.detect(scene.topology, {scene.substepStart, scene.state.position});
+  detector.detect(scene.topology, scene.collision, {scene.substepStart, scene.state.position});
 
   const std::span<const Vec3> start = scene.substepStart, end = scene.state.position;
   std::set<std::pair<Index, Index>> expectedEntries;
@@ -365,7 +365,7 @@ constexpr std::size_t kInterpenetrationBound = 0;
 /// Pairs of triangles of different surfaces (bodies and static meshes) that intersect, by the
 /// tests' exact checker, not by the code under test.
 std::size_t intersectingPairsBetweenSurfaces(const Simulator& simulator) {
-  return test::countIntersectingPairs(simulator.topology().collision, simulator.state().position)
+  return test::countIntersectingPairs(simulator.collision(), simulator.state().position)
       .betweenSurfaces;
 }
 

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 

@@ -1,6 +1,6 @@
 // The material presets hold the values the Materials table documents (docs/materials.md): the table
 // is read from that page itself, so the code and the documentation cannot drift apart unnoticed.
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 
 #include <gtest/gtest.h>
 

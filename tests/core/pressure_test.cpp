@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "core/dynamics/forces.hpp"
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"
 

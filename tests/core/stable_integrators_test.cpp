@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/collision/contact_accuracy.hpp"
 #include "core/dynamics/stability.hpp"
 #include "core/simulator.hpp"
 #include "test_worlds.hpp"

@@ -3,6 +3,7 @@
 
 #include <vector>
 
+#include "core/collision/geometry.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/integrator.hpp"
 #include "core/mesh/icosphere.hpp"
@@ -15,12 +16,14 @@ namespace softbake::test {
 /// A topology, its state and the stages' buffers, for tests that run one stage at a time.
 struct StagedScene {
   SceneTopology topology;
+  CollisionGeometry collision;
   SimulationState state;
   ForceBuffers forces;
   std::vector<Vec3> substepStart;  ///< the integrator's copy of where the substep began
 
   explicit StagedScene(SceneTopology built)
       : topology(std::move(built)),
+        collision(buildCollisionGeometry(topology)),
         state(initialState(topology)),
         forces(topology),
         substepStart(state.position) {}

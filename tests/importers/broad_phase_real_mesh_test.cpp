@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/simulator.hpp"
 #include "generated_meshes.hpp"
 #include "importers/mesh_import.hpp"
@@ -61,8 +61,8 @@ TEST(BroadPhaseOnRealMeshes, EveryKindAndLevelFindsBruteForcesPairsWhileTheyDefo
   for (int round = 0; round < 3; ++round) {
     for (int s = 0; s < 40; ++s) simulator.step(2);  // deform between the checks
     const std::vector<Vec3>& now = simulator.state().position;
-    updateCollisionBoxes(simulator.topology(), {now, now}, boxes);
-    const BroadPhaseInput input = simulator.topology().collision.broadPhaseInput(boxes);
+    updateCollisionBoxes(simulator.topology(), simulator.collision(), {now, now}, boxes);
+    const BroadPhaseInput input = simulator.collision().broadPhaseInput(boxes);
     brute->findPairs(input, expected);
     ASSERT_GT(expected.size(), 1000u) << "the bodies must overlap for the test to mean anything";
     for (std::size_t k = 0; k < others.size(); ++k) {

@@ -6,7 +6,7 @@
 #include <limits>
 #include <utility>
 
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/simulator.hpp"
 

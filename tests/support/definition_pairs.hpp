@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 
 namespace softbake::test {
 

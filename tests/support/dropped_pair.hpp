@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/scene/scene_setup.hpp"
 

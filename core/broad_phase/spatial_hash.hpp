@@ -2,14 +2,14 @@
 /// Spatial hashing after Teschner et al. 2003, "Optimized Spatial Hashing for Collision Detection
 /// of Deformable Objects" ("spatialhash"): triangles are entered in a hash table under every grid
 /// cell their box covers, and each triangle then looks up the cells of its own box.
-/// Output: see core/collision/broad_phase.hpp.
+/// Output: see core/broad_phase/broad_phase.hpp.
 
 #include <array>
 #include <cstdint>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
-#include "core/collision/sbhash_broad_phase.hpp"  // BoxHashGrid: the same cell hash, one grid per level
+#include "core/broad_phase/broad_phase.hpp"
+#include "core/broad_phase/sbhash.hpp"  // BoxHashGrid: the same cell hash, one grid per level
 
 namespace softbake {
 

@@ -10,7 +10,7 @@
 // (a body that translates, or inflates evenly, keeps a good tree), which a rule on the raw sum
 // would rebuild for nothing.
 
-#include "core/collision/bvh_broad_phase.hpp"
+#include "core/broad_phase/bvh.hpp"
 
 #include <tbb/parallel_for.h>
 

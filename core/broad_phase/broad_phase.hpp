@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/parallel.hpp"
+#include "core/scene/settings.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
@@ -69,25 +70,6 @@ struct TrianglePair {
 /// The eligibility rule above, for triangles i ≠ j.
 bool pairEligible(const BroadPhaseInput& input, Index i, Index j);
 
-enum class BroadPhaseKind {
-  Sbhash,       ///< "sbhash": the paper's multi-level subdivided boxes (§2.1) and box hash (§2.2)
-  SpatialHash,  ///< Teschner et al. 2003 ("spatialhash")
-  Bvh,          ///< an AABB tree, refitted each step ("bvh")
-  BruteForce,   ///< every pair ("brute"): the reference
-};
-
-/// Every kind, in the order the command line and the scene format list them.
-inline constexpr BroadPhaseKind kBroadPhaseKinds[] = {
-    BroadPhaseKind::Sbhash, BroadPhaseKind::SpatialHash, BroadPhaseKind::Bvh,
-    BroadPhaseKind::BruteForce};
-
-/// "sbhash", "spatialhash", "bvh", "brute".
-std::string_view broadPhaseName(BroadPhaseKind kind);
-/// The names of kBroadPhaseKinds, in order: what the command line and the scene parser accept.
-std::vector<std::string> broadPhaseNames();
-/// The kind a name gives, or false for an unknown name.
-bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind);
-
 struct BroadPhaseOptions {
   int subdivisionLevels = 3;  ///< sbhash: level L splits each surface box into 2^L per axis
 };
@@ -115,8 +97,8 @@ class BroadPhase {
 std::unique_ptr<BroadPhase> makeBroadPhase(BroadPhaseKind kind,
                                            const BroadPhaseOptions& options = {});
 
-/// What the broad phases share (core/collision/broad_phase.cpp), so each states the output contract
-/// once. For implementers of BroadPhase, not for callers.
+/// What the broad phases share (core/broad_phase/broad_phase.cpp), so each states the output
+/// contract once. For implementers of BroadPhase, not for callers.
 namespace broad_phase_detail {
 
 /// Appends (min, max) of i ≠ j when their boxes overlap and pairEligible allows them. The box

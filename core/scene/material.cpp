@@ -1,4 +1,4 @@
-#include "core/dynamics/material.hpp"
+#include "core/scene/material.hpp"
 
 #include <array>
 

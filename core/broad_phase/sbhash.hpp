@@ -7,14 +7,14 @@
 /// surfaces are cut once). The 8 corners of every leaf box are hashed into a bucket table; leaves
 /// sharing a bucket are candidate leaf pairs, and the triangles of overlapping candidate leaves
 /// give the triangle pairs. Surfaces whose box meets no other are skipped. Output: see
-/// core/collision/broad_phase.hpp; the argument that nothing is missed: the .cpp.
+/// core/broad_phase/broad_phase.hpp; the argument that nothing is missed: the .cpp.
 
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 
 namespace softbake {
 

@@ -1,4 +1,4 @@
-#include "core/collision/pair_cache.hpp"
+#include "core/broad_phase/pair_cache.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,4 +1,4 @@
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,10 +8,9 @@
 #include <array>
 #include <cstdint>
 
-#include "core/collision/bvh_broad_phase.hpp"
-#include "core/collision/sbhash_broad_phase.hpp"
-#include "core/collision/spatial_hash_broad_phase.hpp"
-#include "core/enum_names.hpp"
+#include "core/broad_phase/bvh.hpp"
+#include "core/broad_phase/sbhash.hpp"
+#include "core/broad_phase/spatial_hash.hpp"
 
 namespace softbake {
 
@@ -25,28 +24,6 @@ bool pairEligible(const BroadPhaseInput& input, Index i, Index j) {
     for (Index b : input.triangleVertices[j])
       if (a == b) return false;
   return true;
-}
-
-std::string_view broadPhaseName(BroadPhaseKind kind) {
-  switch (kind) {
-    case BroadPhaseKind::Sbhash:
-      return "sbhash";
-    case BroadPhaseKind::SpatialHash:
-      return "spatialhash";
-    case BroadPhaseKind::Bvh:
-      return "bvh";
-    case BroadPhaseKind::BruteForce:
-      return "brute";
-  }
-  return "unknown";
-}
-
-std::vector<std::string> broadPhaseNames() {
-  return namesOf(std::span<const BroadPhaseKind>(kBroadPhaseKinds), broadPhaseName);
-}
-
-bool parseBroadPhase(std::string_view name, BroadPhaseKind& kind) {
-  return parseNamed(name, std::span<const BroadPhaseKind>(kBroadPhaseKinds), broadPhaseName, kind);
 }
 
 namespace broad_phase_detail {

@@ -22,7 +22,7 @@
 //     leaf boxes, so only the triangles of a whose boxes meet b's box (and those of b meeting a's
 //     box) need to be tried against each other.
 
-#include "core/collision/sbhash_broad_phase.hpp"
+#include "core/broad_phase/sbhash.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -2,12 +2,12 @@
 /// An AABB tree per surface ("bvh"): built once by median splits, refitted bottom-up each step,
 /// rebuilt when refitting has let it grow loose. Pairs come from descending two trees together
 /// (a tree against itself for a self-colliding surface). Output: see
-/// core/collision/broad_phase.hpp.
+/// core/broad_phase/broad_phase.hpp.
 
 #include <cstdint>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 
 namespace softbake {
 

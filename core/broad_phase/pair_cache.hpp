@@ -23,7 +23,7 @@
 #include <span>
 #include <vector>
 
-#include "core/collision/broad_phase.hpp"
+#include "core/broad_phase/broad_phase.hpp"
 #include "core/parallel.hpp"
 
 namespace softbake {

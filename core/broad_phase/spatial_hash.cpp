@@ -19,7 +19,7 @@
 // by the triangle on level a, in level b's cells (at most 3 per axis, as they are coarser): so
 // every triangle queries its own level and each coarser level in use.
 
-#include "core/collision/spatial_hash_broad_phase.hpp"
+#include "core/broad_phase/spatial_hash.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
