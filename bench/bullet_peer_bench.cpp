@@ -10,9 +10,15 @@
 /// produce the same motion, only the same amount of work to do per step.
 ///
 ///   build/bench/bullet_peer_bench SCENE [--steps N] [--warmup N] [--csv FILE]
+///   build/bench/bullet_peer_bench SCENE --frames F [--substeps-per-frame N]
 ///
 /// SCENE as for `softbake bench` (a file or a built-in name). Bullet's soft bodies run on one
-/// thread. Prints one machine-readable line, and with --csv writes it as a CSV row too:
+/// thread. With --steps, N steps at softbake's time step. With --frames, the scene's first F
+/// frames as a Bullet user runs them, N substeps a frame (default 10, Bullet's usual setting),
+/// and after each frame, outside the timing, the result's quality: how deep a node is below the
+/// ground, how far a closed body's volume is from its rest volume, and how many triangle pairs of
+/// different bodies intersect (the tests' exact checker). Prints one machine-readable line, and
+/// with --csv writes it as a CSV row too:
 ///   peer=bullet scene=balls10k faces=10240 steps=500 steps_per_s=...
 
 #include <BulletSoftBody/btDefaultSoftBodySolver.h>
@@ -22,11 +28,14 @@
 #include <btBulletDynamicsCommon.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -35,6 +44,7 @@
 #include "core/simulator.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
+#include "tests/support/intersection_checker.hpp"
 
 namespace softbake {
 namespace {
@@ -42,6 +52,8 @@ namespace {
 struct Arguments {
   std::string scene;
   long steps = 500, warmup = 0;
+  long frames = 0;             ///< with --frames: simulate the scene's frames 2..frames
+  long substepsPerFrame = 10;  ///< Bullet's usual setting
   std::string csv;
 };
 
@@ -58,6 +70,10 @@ Arguments parse(int argc, char** argv) {
       arguments.steps = value();
     else if (flag == "--warmup")
       arguments.warmup = value();
+    else if (flag == "--frames")
+      arguments.frames = value();
+    else if (flag == "--substeps-per-frame")
+      arguments.substepsPerFrame = value();
     else if (flag == "--csv")
       arguments.csv = text();
     else if (flag.rfind("--", 0) == 0)
@@ -66,8 +82,13 @@ Arguments parse(int argc, char** argv) {
       arguments.scene = flag;
   }
   if (arguments.scene.empty())
-    throw Error("usage: bullet_peer_bench SCENE [--steps N] [--warmup N] [--csv FILE]");
+    throw Error(
+        "usage: bullet_peer_bench SCENE [--steps N] [--warmup N] [--frames F "
+        "[--substeps-per-frame N]] [--csv FILE]");
   if (arguments.steps < 1) throw Error("--steps must be at least 1");
+  if (arguments.frames == 1 || arguments.frames < 0)
+    throw Error("--frames must be at least 2: frame 1 is the start");
+  if (arguments.substepsPerFrame < 1) throw Error("--substeps-per-frame must be at least 1");
   return arguments;
 }
 
@@ -90,6 +111,33 @@ struct BulletWorld {
   }
 };
 
+/// The worst of every frame, as bench/volumes.py and the exact checker measure softbake's.
+struct Quality {
+  double maxPenetration = 0;        ///< m below a ground plane, over every node
+  double maxVolumeError = 0;        ///< max |V / V_rest − 1| over the closed bodies
+  std::size_t maxPairsBetween = 0;  ///< intersecting triangle pairs of different bodies
+
+  void add(const Simulator& reference, std::span<const Vec3> positions) {
+    const SceneTopology& w = reference.topology();
+    for (const PlaneCollider& plane : w.planes)
+      for (const Vec3& x : positions)
+        maxPenetration = std::max(maxPenetration, -double(heightAbove(plane, x)));
+    for (const Body& body : w.bodies) {
+      if (!body.closed || body.restVolume <= 0) continue;
+      double volume = 0;
+      for (const Triangle& t : w.bodyTriangles(body)) {
+        const Vec3d a = positions[t[0]].cast<double>(), b = positions[t[1]].cast<double>(),
+                    c = positions[t[2]].cast<double>();
+        volume += a.dot(b.cross(c)) / 6;
+      }
+      maxVolumeError = std::max(maxVolumeError, std::abs(volume / body.restVolume - 1));
+    }
+    maxPairsBetween =
+        std::max(maxPairsBetween,
+                 test::countIntersectingPairs(reference.collision(), positions).betweenSurfaces);
+  }
+};
+
 int run(int argc, char** argv) {
   const Arguments arguments = parse(argc, argv);
   const SceneFile scene = loadSceneInput(arguments.scene);
@@ -97,7 +145,9 @@ int run(int argc, char** argv) {
   const Simulator reference(buildSceneTopology(scene.setup));
   const SceneTopology& w = reference.topology();
   const SimulationState& initial = reference.state();
-  const double dt = reference.substeps().timeStep;
+  const bool byFrames = arguments.frames > 0;
+  const double dt = byFrames ? 1.0 / w.settings.fps / double(arguments.substepsPerFrame)
+                             : reference.substeps().timeStep;
 
   BulletWorld bullet;
   const Vec3 g = w.settings.gravity;
@@ -145,26 +195,54 @@ int run(int argc, char** argv) {
   }
 
   for (long s = 0; s < arguments.warmup; ++s) bullet.world.stepSimulation(btScalar(dt), 0);
-  const auto start = std::chrono::steady_clock::now();
-  for (long s = 0; s < arguments.steps; ++s) bullet.world.stepSimulation(btScalar(dt), 0);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Quality quality;
+  double seconds = 0;
+  long steps = arguments.steps;
+  if (byFrames) {
+    steps = (arguments.frames - 1) * arguments.substepsPerFrame;
+    std::vector<Vec3> positions(w.particleCount());
+    for (long frame = 2; frame <= arguments.frames; ++frame) {
+      const auto start = std::chrono::steady_clock::now();
+      for (long s = 0; s < arguments.substepsPerFrame; ++s)
+        bullet.world.stepSimulation(btScalar(dt), 0);
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      for (std::size_t b = 0; b < w.bodies.size(); ++b) {
+        const btAlignedObjectArray<btSoftBody::Node>& nodes = bullet.bodies[b]->m_nodes;
+        for (int i = 0; i < nodes.size(); ++i) {
+          const btVector3& x = nodes[i].m_x;
+          positions[w.bodies[b].firstParticle + Index(i)] = Vec3(x.x(), x.y(), x.z());
+        }
+      }
+      quality.add(reference, positions);
+    }
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    for (long s = 0; s < steps; ++s) bullet.world.stepSimulation(btScalar(dt), 0);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
 
   rusage usage{};
   ::getrusage(RUSAGE_SELF, &usage);
-  const double stepsPerSecond = double(arguments.steps) / seconds;
+  const double stepsPerSecond = double(steps) / seconds;
   const double peakMiB = double(usage.ru_maxrss) / 1024.0;
+  const std::string frameFields =
+      byFrames ? cat(" substeps_per_frame=", arguments.substepsPerFrame,
+                     " frames_per_s=", double(arguments.frames - 1) / seconds,
+                     " max_penetration_m=", quality.maxPenetration,
+                     " max_volume_error=", quality.maxVolumeError,
+                     " max_pairs_between_bodies=", quality.maxPairsBetween)
+               : std::string();
   std::printf(
       "peer=bullet scene=%s faces=%zu bodies=%zu dt_ms=%.4g warmup=%ld steps=%ld "
-      "steps_per_s=%.1f peak_rss_mb=%.1f\n",
-      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup, arguments.steps,
-      stepsPerSecond, peakMiB);
+      "steps_per_s=%.1f peak_rss_mb=%.1f%s\n",
+      scene.setup.name.c_str(), faces, w.bodies.size(), dt * 1e3, arguments.warmup, steps,
+      stepsPerSecond, peakMiB, frameFields.c_str());
   if (!arguments.csv.empty())
     writeFileAtomically(
         arguments.csv,
         cat("peer,scene,faces,bodies,dt_ms,warmup,steps,steps_per_s,peak_rss_mb\n", "bullet,",
             scene.setup.name, ",", faces, ",", w.bodies.size(), ",", dt * 1e3, ",",
-            arguments.warmup, ",", arguments.steps, ",", stepsPerSecond, ",", peakMiB, "\n"));
+            arguments.warmup, ",", steps, ",", stepsPerSecond, ",", peakMiB, "\n"));
   return 0;
 }
 
