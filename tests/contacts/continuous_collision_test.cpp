@@ -8,7 +8,7 @@
 #include <Eigen/LU>
 #include <random>
 
-#include "tests/support/point_triangle_distance.hpp"
+#include "tests/support/exact_geometry.hpp"
 
 namespace softbake {
 namespace {

@@ -11,8 +11,8 @@
 #include "core/collision/detection.hpp"
 #include "core/scene/material.hpp"
 #include "tests/core/test_worlds.hpp"
+#include "tests/support/exact_geometry.hpp"
 #include "tests/support/intersection_checker.hpp"
-#include "tests/support/point_triangle_distance.hpp"
 
 namespace softbake {
 namespace {

@@ -1,5 +1,5 @@
 // The exact intersection checker (tests/support/intersection_checker) against an independent
-// reference (Möller's interval test in double, tests/core/exact_geometry.hpp) wherever that
+// reference (Möller's interval test in double, tests/support/exact_geometry.hpp) wherever that
 // reference is clear of rounding, and by hand where only exact arithmetic can tell.
 #include "tests/support/intersection_checker.hpp"
 
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <random>
 
-#include "tests/core/exact_geometry.hpp"
+#include "tests/support/exact_geometry.hpp"
 
 namespace softbake::test {
 namespace {

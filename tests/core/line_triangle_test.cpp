@@ -11,7 +11,7 @@
 #include <limits>
 #include <random>
 
-#include "exact_geometry.hpp"
+#include "tests/support/exact_geometry.hpp"
 
 namespace softbake {
 namespace {

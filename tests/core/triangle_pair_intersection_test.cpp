@@ -1,6 +1,6 @@
 // The multi-pass test (Mesit & Guha §2.3) on triangle pairs: analytic configurations on small
 // integer coordinates (exact in float, so points are compared with ==), then random pairs against
-// Möller's triangle–triangle test in double (tests/core/exact_geometry.hpp).
+// Möller's triangle–triangle test in double (tests/support/exact_geometry.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <random>
 
 #include "core/collision/triangle_pair_intersection.hpp"
-#include "exact_geometry.hpp"
+#include "tests/support/exact_geometry.hpp"
 
 namespace softbake {
 namespace {
@@ -229,14 +229,14 @@ TEST(TrianglePairReference, CoplanarAndCollapsedCasesFollowTheClosedSets) {
 // crosses the other face clear of its band, or finds none but some edge comes within its band of
 // the other face.
 
-constexpr double kBandEpsilon = 4 * double(std::numeric_limits<Scalar>::epsilon());
+constexpr double kPairBandEpsilon = 4 * double(std::numeric_limits<Scalar>::epsilon());
 
-enum Kind { kOrdinary, kSliver, kNearlyParallel, kKinds };
-constexpr const char* kKindNames[kKinds] = {"ordinary", "sliver", "nearly parallel"};
+enum PairKind { kOrdinaryPair, kSliverPair, kNearlyParallel, kPairKinds };
+constexpr const char* kPairKindNames[kPairKinds] = {"ordinary", "sliver", "nearly parallel"};
 
 struct RandomPair {
   TriangleCorners first, second;
-  Kind kind;
+  PairKind kind;
 };
 
 /// Triangles of log-uniform size 10^-3…10^3 anywhere within 20 sizes of the origin, the second
@@ -255,9 +255,9 @@ RandomPair randomPair(std::mt19937& rng) {
     second[k] = center + offset + size * vec();
   }
   const double draw = zeroOne(rng);
-  const Kind kind = draw < 0.1 ? kSliver : draw > 0.9 ? kNearlyParallel : kOrdinary;
+  const PairKind kind = draw < 0.1 ? kSliverPair : draw > 0.9 ? kNearlyParallel : kOrdinaryPair;
   const Vec3d n = (first[1] - first[0]).cross(first[2] - first[0]).normalized();
-  if (kind == kSliver) {
+  if (kind == kSliverPair) {
     double u = zeroOne(rng), v = zeroOne(rng);
     if (u + v > 1) u = 1 - u, v = 1 - v;
     const Vec3d centroid = (first[0] + first[1] + first[2]) / 3;
@@ -302,7 +302,7 @@ void expectHitsOnBothTriangles(const TriangleCorners& edges, const TriangleCorne
     ASSERT_TRUE(point.allFinite()) << "pair " << pairIndex;
     const Vec3d &start = e[edge], &end = e[(edge + 1) % 3];
     const double tolerance =
-        test::segmentTriangleBand(start, end, f[0], f[1], f[2], kBandEpsilon).pointTolerance;
+        test::segmentTriangleBand(start, end, f[0], f[1], f[2], kPairBandEpsilon).pointTolerance;
     EXPECT_LE(test::pointSegmentDistance(point, start, end), tolerance) << "pair " << pairIndex;
     EXPECT_LE(test::pointTriangleDistance(point, f[0], f[1], f[2]), tolerance)
         << "pair " << pairIndex;
@@ -312,8 +312,8 @@ void expectHitsOnBothTriangles(const TriangleCorners& edges, const TriangleCorne
 TEST(TrianglePairRandom, AgreesWithMollersTriangleTestOutsideTheRoundingBand) {
   std::mt19937 rng(20240612);
   constexpr int kPairs = 100000;
-  int count[kKinds] = {}, intersecting[kKinds] = {}, ambiguous[kKinds] = {},
-      disagreements[kKinds] = {};
+  int count[kPairKinds] = {}, intersecting[kPairKinds] = {}, ambiguous[kPairKinds] = {},
+      disagreements[kPairKinds] = {};
   for (int i = 0; i < kPairs; ++i) {
     const RandomPair pair = randomPair(rng);
     const TriangleCorners &first = pair.first, &second = pair.second;
@@ -321,7 +321,7 @@ TEST(TrianglePairRandom, AgreesWithMollersTriangleTestOutsideTheRoundingBand) {
     TrianglePairHits hits;
     const bool code = intersectTrianglePair(first, second, hits);
     const bool reference = test::trianglesIntersect(firstD, secondD);
-    const test::PairVerdict verdict = test::classifyTrianglePair(firstD, secondD, kBandEpsilon);
+    const test::PairVerdict verdict = test::classifyTrianglePair(firstD, secondD, kPairBandEpsilon);
     ASSERT_NE(verdict, test::PairVerdict::Inconsistent)
         << "pair " << i << ": the two double references disagree";
     ++count[pair.kind];
@@ -345,17 +345,17 @@ TEST(TrianglePairRandom, AgreesWithMollersTriangleTestOutsideTheRoundingBand) {
       EXPECT_EQ(swapped.secondEdges[k].hit.point, hits.firstEdges[k].hit.point);
   }
   int total = 0;
-  for (int kind = 0; kind < kKinds; ++kind) {
-    EXPECT_GT(intersecting[kind], count[kind] / 5) << kKindNames[kind];
-    EXPECT_LT(intersecting[kind], count[kind] * 4 / 5) << kKindNames[kind];
+  for (int kind = 0; kind < kPairKinds; ++kind) {
+    EXPECT_GT(intersecting[kind], count[kind] / 5) << kPairKindNames[kind];
+    EXPECT_LT(intersecting[kind], count[kind] * 4 / 5) << kPairKindNames[kind];
     total += disagreements[kind];
-    std::cout << "[          ] " << kKindNames[kind] << ": " << count[kind] << " pairs, "
+    std::cout << "[          ] " << kPairKindNames[kind] << ": " << count[kind] << " pairs, "
               << intersecting[kind] << " intersecting, " << ambiguous[kind] << " in the band, "
               << disagreements[kind] << " disagreements\n";
   }
-  EXPECT_LT(ambiguous[kOrdinary], count[kOrdinary] / 200);
-  EXPECT_LT(ambiguous[kSliver] + ambiguous[kNearlyParallel],
-            (count[kSliver] + count[kNearlyParallel]) / 2);
+  EXPECT_LT(ambiguous[kOrdinaryPair], count[kOrdinaryPair] / 200);
+  EXPECT_LT(ambiguous[kSliverPair] + ambiguous[kNearlyParallel],
+            (count[kSliverPair] + count[kNearlyParallel]) / 2);
   EXPECT_LE(total, kPairs / 1000);
 }
 

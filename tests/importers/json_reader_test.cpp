@@ -12,7 +12,7 @@ namespace softbake {
 namespace {
 
 template <class Read>
-std::string errorOf(Read read) {
+std::string jsonErrorOf(Read read) {
   try {
     read();
   } catch (const Error& error) {
@@ -22,7 +22,7 @@ std::string errorOf(Read read) {
 }
 
 std::string parseError(std::string_view text) {
-  return errorOf([&] { parseJsonText(text, "scene.json"); });
+  return jsonErrorOf([&] { parseJsonText(text, "scene.json"); });
 }
 
 TEST(JsonReader, SyntaxErrorsNameLineAndColumn) {
@@ -66,40 +66,43 @@ TEST(JsonReader, TypeAndRangeErrorsNameTheKeyPath) {
       R"({"n": -2, "s": "x", "i": 2.5, "big": 12, "v": [1, "y", 3], "flag": 1, "whole": 4.0})");
   const JsonValue root(json, "scene.json", "");
   const JsonObject object = root.object({"n", "s", "i", "big", "v", "flag", "whole"});
-  EXPECT_EQ(errorOf([&] { object.at("s").number(); }), "scene.json: s: expected number");
-  EXPECT_EQ(errorOf([&] { object.at("n").string(); }), "scene.json: n: expected string");
-  EXPECT_EQ(errorOf([&] { object.at("n").numberAbove(0); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("s").number(); }), "scene.json: s: expected number");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("n").string(); }), "scene.json: n: expected string");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("n").numberAbove(0); }),
             "scene.json: n: expected a number > 0");
-  EXPECT_EQ(errorOf([&] { object.at("n").numberAtLeast(0.5); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("n").numberAtLeast(0.5); }),
             "scene.json: n: expected a number >= 0.5");
-  EXPECT_EQ(errorOf([&] { object.at("n").numberIn(0, 1); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("n").numberIn(0, 1); }),
             "scene.json: n: expected a number in [0, 1]");
-  EXPECT_EQ(errorOf([&] { object.at("i").integerAtLeast(0); }), "scene.json: i: expected integer");
-  EXPECT_EQ(errorOf([&] { object.at("big").integerIn(1, 9); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("i").integerAtLeast(0); }),
+            "scene.json: i: expected integer");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("big").integerIn(1, 9); }),
             "scene.json: big: expected an integer in [1, 9]");
   EXPECT_EQ(object.at("whole").integerIn(1, 9), 4);
-  EXPECT_EQ(errorOf([&] { object.at("v").vector3(); }), "scene.json: v[1]: expected number");
-  EXPECT_EQ(errorOf([&] { object.at("s").vector3(); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("v").vector3(); }), "scene.json: v[1]: expected number");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("s").vector3(); }),
             "scene.json: s: expected array of 3 numbers");
-  EXPECT_EQ(errorOf([&] { object.at("flag").boolean(); }), "scene.json: flag: expected boolean");
-  EXPECT_EQ(errorOf([&] { object.at("s").array(); }), "scene.json: s: expected array");
-  EXPECT_EQ(errorOf([&] { object.at("s").object({}); }), "scene.json: s: expected object");
-  EXPECT_EQ(errorOf([&] { object.at("missing"); }), "scene.json: missing key 'missing'");
-  EXPECT_EQ(errorOf([&] { object.value().child("v").element(0).object({}); }),
+  EXPECT_EQ(jsonErrorOf([&] { object.at("flag").boolean(); }),
+            "scene.json: flag: expected boolean");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("s").array(); }), "scene.json: s: expected array");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("s").object({}); }), "scene.json: s: expected object");
+  EXPECT_EQ(jsonErrorOf([&] { object.at("missing"); }), "scene.json: missing key 'missing'");
+  EXPECT_EQ(jsonErrorOf([&] { object.value().child("v").element(0).object({}); }),
             "scene.json: v[0]: expected object");
 }
 
 TEST(JsonReader, UnknownKeysSuggestTheClosestOrListAll) {
   const nlohmann::json json = nlohmann::json::parse(R"({"m": {"stifness": 1}, "q": {"zzz": 1}})");
   const JsonValue root(json, "scene.json", "");
-  EXPECT_EQ(errorOf([&] { root.object({"m"}); }), "scene.json: unknown key 'q' (valid keys: m)");
+  EXPECT_EQ(jsonErrorOf([&] { root.object({"m"}); }),
+            "scene.json: unknown key 'q' (valid keys: m)");
   const JsonValue m = root.object({"m", "q"}).at("m");
-  EXPECT_EQ(errorOf([&] {
+  EXPECT_EQ(jsonErrorOf([&] {
               m.object({"preset", "stiffness", "damping"});
             }),
             "scene.json: m: unknown key 'stifness' (did you mean 'stiffness'?)");
   const JsonValue q = root.object({"m", "q"}).at("q");
-  EXPECT_EQ(errorOf([&] {
+  EXPECT_EQ(jsonErrorOf([&] {
               q.object({"preset", "stiffness"});
             }),
             "scene.json: q: unknown key 'zzz' (valid keys: preset, stiffness)");

@@ -14,7 +14,7 @@
 namespace softbake {
 namespace {
 
-constexpr int kWidth = 200, kHeight = 150;
+constexpr int kPixelsWidth = 200, kPixelsHeight = 150;
 
 Camera testCamera() {
   Camera camera;
@@ -30,70 +30,72 @@ TEST(ChangedPixels, HoldsTheProjectionOfEveryPointAdded) {
   std::mt19937 random(7);
   std::uniform_real_distribution<float> coordinate(-1.5f, 1.5f);
   for (int trial = 0; trial < 200; ++trial) {
-    ChangedPixels changed(viewProjection(camera, kWidth, kHeight), kWidth, kHeight);
+    ChangedPixels changed(viewProjection(camera, kPixelsWidth, kPixelsHeight), kPixelsWidth,
+                          kPixelsHeight);
     std::vector<Eigen::Vector2f> pixels;
     for (int i = 0; i < 3; ++i) {
       const Vec3f p(coordinate(random), coordinate(random) + 0.5f, coordinate(random));
       changed.add(p);
-      pixels.push_back(*projectToPixel(camera, kWidth, kHeight, p));
+      pixels.push_back(*projectToPixel(camera, kPixelsWidth, kPixelsHeight, p));
     }
     const PixelRect r = changed.rect();
     for (const Eigen::Vector2f& pixel : pixels) {
       // projectToPixel counts rows from the top, the rectangle from the bottom, as OpenGL does.
-      const float y = float(kHeight) - pixel.y();
-      if (pixel.x() < 0 || pixel.x() > kWidth || y < 0 || y > kHeight) continue;
+      const float y = float(kPixelsHeight) - pixel.y();
+      if (pixel.x() < 0 || pixel.x() > kPixelsWidth || y < 0 || y > kPixelsHeight) continue;
       // A pixel's margin, within the image.
       EXPECT_LE(float(r.x0), std::max(pixel.x() - 1, 0.0f));
-      EXPECT_GE(float(r.x1), std::min(pixel.x() + 1, float(kWidth)));
+      EXPECT_GE(float(r.x1), std::min(pixel.x() + 1, float(kPixelsWidth)));
       EXPECT_LE(float(r.y0), std::max(y - 1, 0.0f));
-      EXPECT_GE(float(r.y1), std::min(y + 1, float(kHeight)));
+      EXPECT_GE(float(r.y1), std::min(y + 1, float(kPixelsHeight)));
     }
     EXPECT_GE(r.x0, 0);
-    EXPECT_LE(r.x1, kWidth);
+    EXPECT_LE(r.x1, kPixelsWidth);
     EXPECT_GE(r.y0, 0);
-    EXPECT_LE(r.y1, kHeight);
+    EXPECT_LE(r.y1, kPixelsHeight);
   }
 }
 
 TEST(ChangedPixels, ABoxHoldsWhatIsInsideIt) {
   const Camera camera = testCamera();
-  ChangedPixels box(viewProjection(camera, kWidth, kHeight), kWidth, kHeight);
+  ChangedPixels box(viewProjection(camera, kPixelsWidth, kPixelsHeight), kPixelsWidth,
+                    kPixelsHeight);
   box.addBox(Vec3f(-0.3f, 0.2f, -0.1f), Vec3f(0.4f, 0.9f, 0.5f));
   const PixelRect r = box.rect();
   ASSERT_FALSE(r.empty());
-  EXPECT_LT(r.width() * r.height(), kWidth * kHeight / 2);
+  EXPECT_LT(r.width() * r.height(), kPixelsWidth * kPixelsHeight / 2);
   std::mt19937 random(3);
   std::uniform_real_distribution<float> unit(0, 1);
   for (int i = 0; i < 1000; ++i) {
     const Vec3f p(-0.3f + 0.7f * unit(random), 0.2f + 0.7f * unit(random),
                   -0.1f + 0.6f * unit(random));
-    const Eigen::Vector2f pixel = *projectToPixel(camera, kWidth, kHeight, p);
+    const Eigen::Vector2f pixel = *projectToPixel(camera, kPixelsWidth, kPixelsHeight, p);
     EXPECT_GE(pixel.x(), float(r.x0));
     EXPECT_LE(pixel.x(), float(r.x1));
-    EXPECT_GE(float(kHeight) - pixel.y(), float(r.y0));
-    EXPECT_LE(float(kHeight) - pixel.y(), float(r.y1));
+    EXPECT_GE(float(kPixelsHeight) - pixel.y(), float(r.y0));
+    EXPECT_LE(float(kPixelsHeight) - pixel.y(), float(r.y1));
   }
 }
 
 TEST(ChangedPixels, NothingAddedIsEmptyAndAnythingBehindTheCameraIsTheWholeImage) {
   const Camera camera = testCamera();
-  const Eigen::Matrix4f projection = viewProjection(camera, kWidth, kHeight);
-  EXPECT_TRUE(ChangedPixels(projection, kWidth, kHeight).rect().empty());
+  const Eigen::Matrix4f projection = viewProjection(camera, kPixelsWidth, kPixelsHeight);
+  EXPECT_TRUE(ChangedPixels(projection, kPixelsWidth, kPixelsHeight).rect().empty());
 
-  ChangedPixels behind(projection, kWidth, kHeight);
+  ChangedPixels behind(projection, kPixelsWidth, kPixelsHeight);
   behind.add(Vec3f(0, 0.5f, 0));
   behind.add(camera.position + (camera.position - camera.target));  // behind the eye
   const PixelRect whole = behind.rect();
   EXPECT_EQ(whole.x0, 0);
   EXPECT_EQ(whole.y0, 0);
-  EXPECT_EQ(whole.x1, kWidth);
-  EXPECT_EQ(whole.y1, kHeight);
+  EXPECT_EQ(whole.x1, kPixelsWidth);
+  EXPECT_EQ(whole.y1, kPixelsHeight);
 
-  ChangedPixels offScreen(projection, kWidth, kHeight);
+  ChangedPixels offScreen(projection, kPixelsWidth, kPixelsHeight);
   offScreen.add(camera.target + Vec3f(1e9f, 0, 0));
   const PixelRect clipped = offScreen.rect();
   EXPECT_GE(clipped.x0, 0);
-  EXPECT_LE(clipped.x1, kWidth);
+  EXPECT_LE(clipped.x1, kPixelsWidth);
 }
 
 /// A ball over the ground and a static block beside it, rendered frame by frame as it rises and
@@ -122,8 +124,8 @@ TEST(FrameRenderer, DrawingOnlyTheChangedPixelsGivesTheWholeRedrawsImage) {
        {Variant{ContactsView::XRay, 4, false}, Variant{ContactsView::Opaque, 4, true},
         Variant{ContactsView::XRay, 1, true}}) {
     RenderOptions options;
-    options.width = kWidth;
-    options.height = kHeight;
+    options.width = kPixelsWidth;
+    options.height = kPixelsHeight;
     options.contactsView = variant.view;
     options.samples = variant.samples;
     options.wireframe = variant.wireframe;
@@ -149,9 +151,10 @@ TEST(FrameRenderer, DrawingOnlyTheChangedPixelsGivesTheWholeRedrawsImage) {
       changedOnly->makeCurrent();
       const std::vector<std::uint8_t> drawn = changedOnly->renderRgb(frame);
       const PixelRect r = changedOnly->changedPixels();
-      partial += r.width() * r.height() < kWidth * kHeight;
+      partial += r.width() * r.height() < kPixelsWidth * kPixelsHeight;
       if (step == 6) {
-        EXPECT_EQ(r.width() * r.height(), kWidth * kHeight) << "a vertex behind the eye";
+        EXPECT_EQ(r.width() * r.height(), kPixelsWidth * kPixelsHeight)
+            << "a vertex behind the eye";
       }
       whole->makeCurrent();
       EXPECT_EQ(drawn, whole->renderRgb(frame))

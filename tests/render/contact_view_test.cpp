@@ -28,13 +28,13 @@ using test::Image;
 using test::makeRenderer;
 using test::showsContactColor;
 
-constexpr int kWidth = 640, kHeight = 360;  // the size the issue measured at
-constexpr int kTolerance = 8;               // per channel, as `softbake compare --metric pixel`
+constexpr int kViewWidth = 640, kViewHeight = 360;  // the size the issue measured at
+constexpr int kTolerance = 8;  // per channel, as `softbake compare --metric pixel`
 
 RenderOptions figureOptions() {
   RenderOptions options;
-  options.width = kWidth;
-  options.height = kHeight;
+  options.width = kViewWidth;
+  options.height = kViewHeight;
   return options;
 }
 
@@ -164,7 +164,7 @@ TEST(ContactView, Figure4sContactsChangeAtLeastAFifthOfAPercentOfItsPixels) {
   const std::size_t changed = differingPixels(withSpheres->renderRgb(figure.pressed),
                                               withoutSpheres->renderRgb(figure.pressed));
   RecordProperty("changed_pixels", std::to_string(changed));
-  EXPECT_GE(double(changed), 0.002 * kWidth * kHeight)
+  EXPECT_GE(double(changed), 0.002 * kViewWidth * kViewHeight)
       << "frame " << figure.pressed.number << ", " << figure.pressed.contacts.size()
       << " contacts: " << changed << " pixels changed";
 }
@@ -182,8 +182,8 @@ TEST(ContactView, AFrameWithoutContactsIsTheSameWithAndWithoutSpheres) {
 float projectedRadius(const Camera& camera, const Vec3f& center, float radius) {
   const Vec3f forward = (camera.target - camera.position).normalized();
   const Vec3f side = forward.cross(camera.up).normalized();
-  const auto middle = projectToPixel(camera, kWidth, kHeight, center);
-  const auto edge = projectToPixel(camera, kWidth, kHeight, center + radius * side);
+  const auto middle = projectToPixel(camera, kViewWidth, kViewHeight, center);
+  const auto edge = projectToPixel(camera, kViewWidth, kViewHeight, center + radius * side);
   if (!middle || !edge) return 1;
   return std::max(1.0f, (*edge - *middle).norm());
 }
@@ -206,8 +206,9 @@ TEST(ContactView, EveryContactInsideTheFrameCoversAPixelOfTheContactColour) {
   int inside = 0, missing = 0;
   for (const Contact& contact : figure.pressed.contacts) {
     const Vec3f center = contact.position.cast<float>();
-    const auto pixel = projectToPixel(camera, kWidth, kHeight, center);
-    if (!pixel || pixel->x() < 0 || pixel->y() < 0 || pixel->x() >= kWidth || pixel->y() >= kHeight)
+    const auto pixel = projectToPixel(camera, kViewWidth, kViewHeight, center);
+    if (!pixel || pixel->x() < 0 || pixel->y() < 0 || pixel->x() >= kViewWidth ||
+        pixel->y() >= kViewHeight)
       continue;
     ++inside;
     // Any pixel the sphere covers: those within its projected radius of the centre's pixel.
@@ -215,8 +216,9 @@ TEST(ContactView, EveryContactInsideTheFrameCoversAPixelOfTheContactColour) {
     const int reach = int(std::ceil(radius));
     const int cx = int(pixel->x()), cy = int(pixel->y());
     bool shown = false;
-    for (int y = std::max(0, cy - reach); y <= std::min(kHeight - 1, cy + reach) && !shown; ++y)
-      for (int x = std::max(0, cx - reach); x <= std::min(kWidth - 1, cx + reach) && !shown; ++x)
+    for (int y = std::max(0, cy - reach); y <= std::min(kViewHeight - 1, cy + reach) && !shown; ++y)
+      for (int x = std::max(0, cx - reach); x <= std::min(kViewWidth - 1, cx + reach) && !shown;
+           ++x)
         shown = float((x - cx) * (x - cx) + (y - cy) * (y - cy)) <= radius * radius &&
                 showsContactColor(with.at(x, y));
     if (!shown) {
@@ -244,7 +246,7 @@ TEST(ContactView, AContactBehindABodyShowsThroughItOnlyInTheContactView) {
   const Camera& camera = opaque->scene().camera;
   const Vec3f center(0, 1, 0);
   const Vec3f behind = center - 0.5f * (camera.position - center).normalized();
-  const auto pixel = projectToPixel(camera, kWidth, kHeight, behind);
+  const auto pixel = projectToPixel(camera, kViewWidth, kViewHeight, behind);
   ASSERT_TRUE(pixel.has_value());
   Frame frame = restFrame(*world);
   const std::vector<std::uint8_t> opaqueWithout = opaque->renderRgb(frame);
@@ -271,7 +273,7 @@ TEST(ContactView, PlaneContactsAreDrawnAndKindsTakeTheirColours) {
   Vec3f toCamera = camera.position - Vec3f(0, 1, 0);
   toCamera.y() = 0;
   const Vec3f onGround = Vec3f(0, 0, 0) + 0.9f * toCamera.normalized();
-  const auto pixel = projectToPixel(camera, kWidth, kHeight, onGround);
+  const auto pixel = projectToPixel(camera, kViewWidth, kViewHeight, onGround);
   ASSERT_TRUE(pixel.has_value());
   const int x = int(pixel->x()), y = int(pixel->y());
   Frame frame = restFrame(*world);
