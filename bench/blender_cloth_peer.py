@@ -106,7 +106,7 @@ import bmesh
 import bpy
 from mathutils import Euler, Matrix, Vector
 
-# softbake's presets, core/dynamics/material.cpp: stiffness N/m, bend_stiffness N/m,
+# softbake's presets, core/scene/material.cpp: stiffness N/m, bend_stiffness N/m,
 # damping (fraction of critical), pressure Pa.
 PRESETS = {
     "stiff": (5000.0, 2500.0, 0.10, 300.0),
