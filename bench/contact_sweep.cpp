@@ -29,9 +29,9 @@ std::string run(const char* lower, const char* upper, float ratio) {
     } catch (const Error&) {
       return "blew up at " + std::to_string(frame);
     }
-    worst = std::max(worst, test::countIntersectingPairs(simulator.collision(),
-                                                         simulator.state().position)
-                                .betweenSurfaces);
+    worst = std::max(worst,
+                     test::countIntersectingPairs(simulator.collision(), simulator.state().position)
+                         .betweenSurfaces);
     rise = std::max(rise, computeEnergy(simulator.topology(), simulator.state()).total() - start);
   }
   char cell[64];

@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/material.hpp"
 #include "core/collision/contact_accuracy.hpp"
 #include "core/dynamics/stability.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/scene/scene_topology.hpp"
 
 namespace softbake {

@@ -46,9 +46,9 @@
 #include <vector>
 
 #include "bench/scene_sizes.hpp"
-#include "core/scene/material.hpp"
 #include "core/error.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "output/frame.hpp"

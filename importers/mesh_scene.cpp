@@ -3,8 +3,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/scene/material.hpp"
 #include "core/error.hpp"
+#include "core/scene/material.hpp"
 #include "core/text.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/mesh_transform.hpp"

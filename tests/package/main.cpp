@@ -6,8 +6,8 @@
 #include <limits>
 #include <utility>
 
-#include "core/scene/material.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/simulator.hpp"
 
 int main() {

@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "core/scene/material.hpp"
 #include "core/mesh/icosphere.hpp"
+#include "core/scene/material.hpp"
 #include "core/scene/scene_setup.hpp"
 
 namespace softbake::test {
