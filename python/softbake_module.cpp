@@ -217,9 +217,7 @@ class Simulation {
       contact["position"] = triple(c.position);
       contact["normal"] = triple(c.normal);
       contact["bodies"] =
-          py::make_tuple(topology.surfaceName(c.surfaceA), c.kind == ContactKind::Plane
-                                                               ? topology.planes[c.surfaceB].name
-                                                               : topology.surfaceName(c.surfaceB));
+          py::make_tuple(topology.surfaceName(c.surfaceA), contactPartnerName(topology, c));
       contact["triangles"] =
           py::make_tuple(local(c.triangleA, c.surfaceA), local(c.triangleB, c.surfaceB));
       contact["particle"] =

@@ -3,8 +3,10 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <string_view>
 
+#include "core/scene/scene_topology.hpp"
 #include "core/types.hpp"
 
 namespace softbake {
@@ -44,5 +46,12 @@ struct Contact {
   Index particle = kNoIndex;   ///< the crossing particle; kNoIndex for edge contacts
   ContactKind kind = ContactKind::EdgeTriangle;
 };
+
+/// What surface A of `contact` met: a collision surface's name, or a plane's.
+inline const std::string& contactPartnerName(const SceneTopology& topology,
+                                             const Contact& contact) {
+  return contact.kind == ContactKind::Plane ? topology.planes[contact.surfaceB].name
+                                            : topology.surfaceName(contact.surfaceB);
+}
 
 }  // namespace softbake
