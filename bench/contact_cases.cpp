@@ -5,7 +5,9 @@
 // from them.
 //
 //   contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] [failsafe|nofailsafe]
-//                 [--csv=FILE]
+//                 [instep|afterstep] [--csv=FILE]
+//
+// instep keeps the contacts apart within the implicit solve (collisions.contactsInStep).
 //
 // --csv=FILE appends one row per frame to FILE (scene, variant, frame, intersecting pairs between
 // bodies and within one, contacts per substep, energy above the start in J), with a header when
@@ -29,7 +31,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] "
-                 "[failsafe|nofailsafe]\n");
+                 "[failsafe|nofailsafe] [instep|afterstep]\n");
     return 1;
   }
   std::FILE* csv = nullptr;
@@ -52,8 +54,11 @@ int main(int argc, char** argv) {
     if (argc > 3 && !parseInitialOverlapMode(argv[3], settings.collisions.initialOverlap))
       throw Error(std::string("unknown initial_overlap ") + argv[3]);
     if (argc > 4) settings.collisions.failsafe = std::strcmp(argv[4], "nofailsafe") != 0;
-    const std::string variant = std::string(integratorName(settings.integrator)) +
-                                (settings.collisions.failsafe ? "" : ", no failsafe");
+    if (argc > 5) settings.collisions.contactsInStep = std::strcmp(argv[5], "instep") == 0;
+    const std::string variant =
+        std::string(integratorName(settings.integrator)) +
+        (settings.collisions.failsafe ? "" : ", no failsafe") +
+        (settings.collisions.contactsInStep ? ", contacts in the step" : "");
     Simulator simulator(buildSceneTopology(file.setup));
     simulator.measureStages(true);
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
@@ -109,7 +114,7 @@ int main(int argc, char** argv) {
     for (const Body& body : simulator.topology().bodies) triangles += body.triangleCount;
     std::printf(
         "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
-        "%.1f |\n",
+        "%.1f | %.2f |\n",
         std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(),
         simulator.topology().bodies.size(), triangles,
         failure.empty() ? std::to_string(reached).c_str()
@@ -117,7 +122,7 @@ int main(int argc, char** argv) {
         worstBetween, framesBetween, worstWithin, framesWithin,
         substeps ? double(contacts) / double(substeps) : 0.0,
         substeps ? 1e3 * responseSeconds / double(substeps) : 0.0, highest - start,
-        double(reached - 1) / wall);
+        double(reached - 1) / wall, reached > 1 ? double(substeps) / double(reached - 1) : 0.0);
     return 0;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "contact_cases: %s\n", error.what());

@@ -40,6 +40,9 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
                                          setAside ? fittedDistance() : Scalar(0));
   if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
     failsafe_.emplace(*topology_, collision_);
+  if (collides_ && collisions.contactsInStep && collisions.response != ResponseMode::None &&
+      stepper_->keepsContactsApart())
+    stepContacts_.emplace(*topology_, collision_);
   if (collisions.initialOverlap == InitialOverlapMode::Ignore) {
     detector_.ignoreOverlaps(initialOverlaps_);
   } else if (setAside) {
@@ -73,7 +76,8 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
 void Simulator::chooseContactAccuracySubsteps() {
   const ContactAccuracy accuracy = contactAccuracySubsteps(
       *topology_, collision_, state_.position, state_.velocity, detector_.candidatePairs(),
-      contactEdgeLength_, contactAccuracyScratch_);
+      contactEdgeLength_, contactAccuracyScratch_,
+      stepContacts_ ? kInStepContactReachFraction : kContactReachFraction);
   substeps_.substeps = std::max(accuracy.substeps, stepper_->fewestAutoSubsteps(substeps_));
   substeps_.closingSpeed = accuracy.closingSpeed;
   substeps_.timeStep = 1.0 / topology_->settings.fps / substeps_.substeps;
@@ -89,8 +93,12 @@ void Simulator::step(int frame) {
   const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
   ++stepsTaken_;
-  if (stepper_->computeForces(topology, state_, forces_)) clock.lap(Stage::Forces);
   const Scalar dt = Scalar(substeps_.timeStep);
+  if (stepContacts_) {
+    stepper_->keepApart(topology, stepContacts_->find(topology, collision_, detector_, state_, dt));
+    clock.lap(Stage::Contacts);
+  }
+  if (stepper_->computeForces(topology, state_, forces_)) clock.lap(Stage::Forces);
   if (!stepper_->step(topology, forces_, dt, state_, substepStart_)) reportBlowUp(frame);
   clock.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
@@ -107,6 +115,11 @@ void Simulator::step(int frame) {
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
     stats_.responses += responses;
+    if (stepContacts_) {
+      const std::span<const char> held = stepper_->contactsHeld();
+      stats_.heldContacts += std::size_t(std::count(held.begin(), held.end(), char(1)));
+      stepContacts_->appendHeld(collision_, held, state_.position, contacts_);
+    }
   }
   stats_.planeContacts += resolvePlaneContacts(
       topology, substepStart_, state_, response != ResponseMode::None, stepper_->planeHolds());

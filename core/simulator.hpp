@@ -28,6 +28,7 @@
 #include "core/collision/geometry.hpp"
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
+#include "core/collision/step_contacts.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/stability.hpp"
 #include "core/dynamics/stepper.hpp"
@@ -39,9 +40,12 @@ namespace softbake {
 
 /// Counts from the latest frame, for progress display and benchmarks.
 struct StepStats {
-  std::size_t planeContacts = 0;     ///< particle–plane contacts summed over the frame's substeps
-  std::size_t candidatePairs = 0;    ///< broad-phase triangle pairs, summed over the substeps
-  std::size_t contacts = 0;          ///< soft and static mesh contacts, summed over the substeps
+  std::size_t planeContacts = 0;   ///< particle–plane contacts summed over the frame's substeps
+  std::size_t candidatePairs = 0;  ///< broad-phase triangle pairs, summed over the substeps
+  std::size_t contacts = 0;        ///< soft and static mesh contacts, summed over the substeps
+  /// Contacts the implicit solve held apart (ContactKind::Held), summed over the substeps; not
+  /// in `contacts`, which counts what the paper's test found crossing.
+  std::size_t heldContacts = 0;
   CollisionResponseStats responses;  ///< summed over the substeps
   FailsafeStats failsafe;            ///< summed over the substeps
   std::size_t detangledBodies = 0;   ///< bodies the Detangler moved, summed over the substeps
@@ -140,6 +144,7 @@ class Simulator {
   ContactAccuracyScratch contactAccuracyScratch_;
   StepStats stats_;
   CollisionDetector detector_;
+  std::optional<StepContacts> stepContacts_;   ///< set when the integrator keeps contacts apart
   std::optional<CollisionFailsafe> failsafe_;  ///< set when settings.collisions.failsafe is on
   /// Set when bodies start inside each other under initial_overlap "separate".
   std::optional<Detangler> detangler_;

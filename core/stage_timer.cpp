@@ -4,6 +4,8 @@ namespace softbake {
 
 const char* stageName(Stage stage) {
   switch (stage) {
+    case Stage::Contacts:
+      return "contacts";
     case Stage::Forces:
       return "forces";
     case Stage::Integration:

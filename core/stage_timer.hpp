@@ -18,12 +18,13 @@ enum class Stage : int {
   NarrowPhase,
   Response,
   Planes,
-  Failsafe
+  Failsafe,
+  Contacts
 };
-inline constexpr int kStageCount = 8;
+inline constexpr int kStageCount = 9;
 
 /// "forces", "integration", "boxes", "broad_phase", "narrow_phase", "response", "planes",
-/// "failsafe".
+/// "failsafe", "contacts" (those the implicit solve keeps apart, found before it).
 const char* stageName(Stage stage);
 
 struct StageTimes {

@@ -222,7 +222,7 @@ void decodeCacheFrame(std::string_view bytes, std::string_view name, Frame& fram
     contact.triangleB = in.get<std::uint32_t>("contacts");
     contact.particle = in.get<std::uint32_t>("contacts");
     const auto kind = in.get<std::uint8_t>("contacts");
-    if (kind > std::uint8_t(ContactKind::Plane))
+    if (kind > std::uint8_t(ContactKind::Held))
       throw Error(cat(name, ": contact ", c, " is of unknown kind ", int(kind)));
     contact.kind = ContactKind(kind);
     for (int zero = 0; zero < 3; ++zero) in.get<std::uint8_t>("contacts");

@@ -112,6 +112,8 @@ Vec3f contactKindColor(ContactKind kind) {
       return {0.85f, 0.0f, 0.75f};
     case ContactKind::Plane:
       return {0.0f, 0.25f, 1.0f};
+    case ContactKind::Held:
+      return {0.1f, 0.7f, 0.25f};
   }
   return defaultContactColor();
 }

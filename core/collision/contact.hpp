@@ -18,9 +18,13 @@ enum class ContactKind : std::uint8_t {
   ParticleTriangle,  ///< a particle of A crossed a triangle of B during the step: case 1 of §2.4
   Corner,            ///< a particle of A crossed two triangles of B at an angle: case 2 of §2.4
   Plane,             ///< a particle of body A touches ground plane B (an index into the planes)
+  /// A particle of A held off a triangle of B within the step's solve, at the end of the substep
+  /// (core/dynamics/contact_springs.hpp); for a static mesh's vertex, `particle` is kNoIndex.
+  Held,
 };
 
-/// "edge-triangle", "particle-triangle", "corner", "plane": the names the contact files use.
+/// "edge-triangle", "particle-triangle", "corner", "plane", "held": the names the contact files
+/// use.
 constexpr std::string_view contactKindName(ContactKind kind) {
   switch (kind) {
     case ContactKind::EdgeTriangle:
@@ -31,6 +35,8 @@ constexpr std::string_view contactKindName(ContactKind kind) {
       return "corner";
     case ContactKind::Plane:
       return "plane";
+    case ContactKind::Held:
+      return "held";
   }
   return "edge-triangle";
 }

@@ -59,7 +59,7 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
                                         std::span<const TrianglePair> touching, double edgeLength,
-                                        ContactAccuracyScratch& scratch) {
+                                        ContactAccuracyScratch& scratch, double reachFraction) {
   const double frameTime = 1.0 / topology.settings.fps;
   const double gravitySpeed = double(topology.settings.gravity.norm()) * frameTime;
   const double skin = double(topology.settings.skin);
@@ -174,7 +174,7 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
       choice.closingSpeed = std::max(choice.closingSpeed, closing);
     }
   }
-  const double reach = kContactReachFraction * (skin + edgeLength);
+  const double reach = reachFraction * (skin + edgeLength);
   if (!(reach > 0) || !std::isfinite(choice.closingSpeed)) {
     choice.substeps = kMaxAutoSubsteps;
     return choice;

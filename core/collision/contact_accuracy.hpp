@@ -24,6 +24,13 @@ inline constexpr int kMaxAutoSubsteps = 64;
 /// other and dropped on a static sphere stay free of intersecting triangles
 /// (tests/core/collision_test); at a half they did not.
 inline constexpr double kContactReachFraction = 0.1;
+/// The same where the implicit solve keeps the contacts it finds before the step apart
+/// (core/dynamics/contact_springs.hpp): there the collision stages no longer need to see each
+/// crossing from nearby, and a substep may close surfaces by a whole short edge (plus the skin),
+/// the distance over which a contact's fixed normal and foot on its triangle still hold. Measured:
+/// the two-layer pile and figure 7 at 2 and 4 substeps a frame keep 0 intersecting pairs and gain
+/// no energy (bench/results/integrators.md).
+inline constexpr double kInStepContactReachFraction = 1.0;
 
 /// The contact reach uses this quantile of the rest edge lengths weighted by surface area, not the
 /// shortest edge: the sliver and tiny triangles of an imported CAD part, scan or character (a
@@ -81,7 +88,8 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
                                         std::span<const Vec3> positions,
                                         std::span<const Vec3> velocities,
                                         std::span<const TrianglePair> touching, double edgeLength,
-                                        ContactAccuracyScratch& scratch);
+                                        ContactAccuracyScratch& scratch,
+                                        double reachFraction = kContactReachFraction);
 
 /// The rest edge length that sets the contact reach: the area-weighted kShortEdgeQuantile
 /// quantile of the triangles' rest edges, scene units; infinity when there is none.

@@ -171,6 +171,12 @@ void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,
   dropSortedPairs(setAside_, pairs);
 }
 
+void CollisionDetector::dropLeftAlone(const CollisionGeometry& geometry,
+                                      std::vector<TrianglePair>& pairs) const {
+  dropIgnoredPairs(geometry, pairs);
+  dropSortedPairs(fitted_, pairs);
+}
+
 void CollisionDetector::detect(const SceneTopology& topology, const CollisionGeometry& geometry,
                                const SubstepMotion& motion, StageClock* clock) {
   updateCollisionBoxes(topology, geometry, motion, boxes_, topology.settings.skin, particleBoxes_);
@@ -180,8 +186,7 @@ void CollisionDetector::detect(const SceneTopology& topology, const CollisionGeo
     pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
   else
     broadPhase_->findPairs(geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
-  dropIgnoredPairs(geometry, pairs_);
-  dropSortedPairs(fitted_, pairs_);
+  dropLeftAlone(geometry, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
   findContacts(topology, geometry, motion);
   if (clock) clock->lap(Stage::NarrowPhase);

@@ -60,6 +60,8 @@ class CollisionDetector {
   /// Removes from `pairs` (sorted, as every broad phase returns them) those between surfaces that
   /// ignoreOverlaps() made ignore each other, and the pairs set aside (setAside()).
   void dropIgnoredPairs(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
+  /// dropIgnoredPairs(), and the fitted pairs (setFitted()) too: what detect() keeps.
+  void dropLeftAlone(const CollisionGeometry& geometry, std::vector<TrianglePair>& pairs) const;
   /// Triangle pairs that this stage and the failsafe leave alone (initial_overlap "set_aside":
   /// those that intersected at the start, until found apart), sorted. Replaces the previous ones.
   void setAside(std::span<const TrianglePair> pairs) {

@@ -60,6 +60,16 @@ double shortEdge(const SceneTopology& topology, const Body& body) {
   return *at;
 }
 
+}  // namespace
+
+double openSurfaceThickness(const SceneTopology& topology, const Body& body) {
+  if (body.closed) return 0;
+  return std::min(double(body.material.thickness),
+                  kThicknessOfShortEdge * shortEdge(topology, body));
+}
+
+namespace {
+
 /// The skin the tolerances are fractions of; with no skin, a ten-thousandth of the scene's size.
 double failsafeSkin(const SceneTopology& topology) {
   if (topology.settings.skin > 0) return topology.settings.skin;
@@ -80,8 +90,7 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   margin_ = tolerance_;
   for (std::size_t b = 0; b < topology.bodies.size(); ++b)
     if (!topology.bodies[b].closed) {
-      thickness_[b] = std::min(double(topology.bodies[b].material.thickness),
-                               kThicknessOfShortEdge * shortEdge(topology, topology.bodies[b]));
+      thickness_[b] = openSurfaceThickness(topology, topology.bodies[b]);
       margin_ = std::max(margin_, thickness_[b]);
     }
   const std::size_t triangles = geometry.triangleVertices.size();

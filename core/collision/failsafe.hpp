@@ -71,6 +71,12 @@ struct CollisionGeometry;
 struct SimulationState;
 class CollisionDetector;
 
+struct Body;
+
+/// The two-sided skin of an open body (a sheet has no inside): its material's thickness, at most
+/// a quarter of its short edges; 0 for a closed body.
+double openSurfaceThickness(const SceneTopology& topology, const Body& body);
+
 struct FailsafeStats {
   std::size_t impacts = 0;        ///< meetings found over all passes
   std::size_t zoneParticles = 0;  ///< particles moved as part of an impact zone

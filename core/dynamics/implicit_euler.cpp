@@ -20,6 +20,9 @@ namespace {
 /// order; small enough that two threads share the work of a 5 000-particle scene evenly (ten
 /// chunks; at 1 024 the six were split three to two, and figure 7 ran 5% slower).
 constexpr std::size_t kChunk = 512;
+/// How far inside its gap, as a share of the skin, a contact spring may end before its force is
+/// raised and the step solved again.
+constexpr Scalar kContactTolerance = Scalar(0.1);
 
 /// y[k] += a·x[k] for k < count, over arrays that do not overlap.
 void addScaled(Scalar* __restrict y, Scalar a, const Scalar* __restrict x, std::size_t count) {
@@ -45,6 +48,7 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       direction_(matrix_.paddedSize(), Vec3::Zero()),
       product_(topology.particleCount(), Vec3::Zero()),
       chunkSum_((topology.particleCount() + kChunk - 1) / kChunk),
+      contacts_(topology.particleCount()),
       holdNormal_(topology.particleCount(), Vec3::Zero()),
       holdSpeed_(topology.particleCount(), 0),
       holdFriction_(topology.particleCount(), 0),
@@ -123,6 +127,7 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
   // particles also takes the surface's impulses, which the residual's sum holds: left alone.
   std::fill(bodyHeld_.begin(), bodyHeld_.end(), 0);
   for (Index i : held_) bodyHeld_[topology.particleBody[i]] = 1;
+  contacts_.markBodies(topology.particleBody.data(), bodyHeld_);
   tbb::parallel_for(std::size_t(0), freeBodies_.size(), [&](std::size_t k) {
     if (bodyHeld_[freeBodies_[k]]) return;
     const Body& body = topology.bodies[freeBodies_[k]];
@@ -218,6 +223,8 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
             volumeGradient_[i] = gradient;
             diagonal += Scalar(volumeCoefficient_[volumeBody]) * gradient * gradient.transpose();
           }
+          if (const Index row = contacts_.row(Index(i)); row != ContactSprings::kNoRow)
+            contacts_.keepBaseDiagonal(row, diagonal);
           inverseDiagonal_[i] = diagonal.inverse();
         }
       });
@@ -230,6 +237,10 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
     tbb::parallel_for(std::size_t(0), chunks,
                       [&](std::size_t chunk) { addVolumeProduct(rhs_.data(), -1, chunk); });
   }
+  const std::span<const Index> touched = contacts_.touched();
+  for (std::size_t row = 0; row < touched.size(); ++row)
+    contacts_.keepBaseRhs(row, rhs_[touched[row]]);
+  contacts_.begin(state.position.data(), state.velocity.data(), topology.settings.gravity, h);
 }
 
 void ImplicitEuler::solve(const SceneTopology& topology) {
@@ -246,9 +257,23 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   const std::size_t n = topology.particleCount();
   const Scalar* inverseMass = topology.inverseMass.data();
   for (Index i : held_) deltaV_[i] = filtered(i, deltaV_[i]) + holdSpeed_[i] * holdNormal_[i];
-  enum class Pass { WarmProduct, Residual, ResidualNorm, Product, Update, Direction };
-  Pass pass = Pass::WarmProduct;
-  double rz = 0, rhsNorm = 0, tolerance = 0;
+  // Contact springs: each product starts with their dots, a pass of its own, since a stencil's
+  // particles lie in any chunks.
+  if (!contacts_.empty()) contacts_.applyRows(rhs_.data(), inverseDiagonal_.data());
+  const bool contacts = contacts_.activeCount() > 0;
+  enum class Pass {
+    WarmContactDots,
+    WarmProduct,
+    Residual,
+    ResidualNorm,
+    ContactDots,
+    Product,
+    Update,
+    Direction
+  };
+  Pass pass = contacts ? Pass::WarmContactDots : Pass::WarmProduct;
+  const std::size_t chunks = chunkSum_.size();
+  double rz = 0, rhsNorm = 0, tolerance = 0, contactCurvature = 0;
   Scalar alpha = 0, beta = 0;
   int iteration = 0;
   bool zeroRhs = false;
@@ -258,8 +283,12 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
     const std::size_t begin = chunk * kChunk, end = std::min(n, (chunk + 1) * kChunk);
     double first = 0, second = 0;
     switch (pass) {
+      case Pass::WarmContactDots:
+        first = contacts_.dots(deltaV_.data(), chunk, chunks);
+        break;
       case Pass::WarmProduct:
         matrix_.multiply(deltaV_.data(), product_.data(), inverseMass, begin, end);
+        if (contacts) contacts_.gather(product_.data(), begin, end);
         if (volume) sumVolumeDots(deltaV_.data(), chunk);
         break;
       case Pass::Residual:
@@ -279,8 +308,12 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       case Pass::ResidualNorm:
         for (std::size_t i = begin; i < end; ++i) first += dot(residual_[i], residual_[i]);
         break;
+      case Pass::ContactDots:
+        first = contacts_.dots(direction_.data(), chunk, chunks);
+        break;
       case Pass::Product:
         first = matrix_.multiply(direction_.data(), product_.data(), inverseMass, begin, end);
+        if (contacts) contacts_.gather(product_.data(), begin, end);
         if (volume) sumVolumeDots(direction_.data(), chunk);
         break;
       case Pass::Update: {
@@ -322,6 +355,9 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       total.second += second;
     }
     switch (pass) {
+      case Pass::WarmContactDots:
+        pass = Pass::WarmProduct;
+        return true;
       case Pass::WarmProduct:
         if (volume) finishVolumeDots();
         pass = Pass::Residual;
@@ -337,10 +373,15 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
       case Pass::ResidualNorm:
         stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
         iteration = 1;
-        pass = Pass::Product;
+        pass = contacts ? Pass::ContactDots : Pass::Product;
         return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
+      case Pass::ContactDots:
+        contactCurvature = total.first;
+        pass = Pass::Product;
+        return true;
       case Pass::Product: {
-        const double curvature = volume ? total.first + finishVolumeDots() : total.first;
+        const double curvature =
+            (volume ? total.first + finishVolumeDots() : total.first) + contactCurvature;
         alpha = Scalar(rz / curvature);
         pass = Pass::Update;
         return curvature > 0;  // else converged to rounding, or a degenerate direction
@@ -355,12 +396,12 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         return true;
       }
       case Pass::Direction:
-        pass = Pass::Product;
+        pass = contacts ? Pass::ContactDots : Pass::Product;
         return ++iteration <= kMaxIterations;
     }
     return false;
   };
-  phases_.run(chunkSum_.size(), runPass, between);
+  phases_.run(chunks, runPass, between);
   if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
@@ -377,7 +418,17 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);
   stepIterations_ += stats_.iterations;
+  // The contact springs' active set: those that pulled let go, stencils that ended inside taken
+  // in, and the step solved again from its Δv.
+  for (int round = 0; round < ContactSprings::kRounds && !contacts_.empty() &&
+                      contacts_.update(state.velocity.data(), deltaV_.data(), dt,
+                                       kContactTolerance * topology.settings.skin) > 0;
+       ++round) {
+    solve(topology);
+    stepIterations_ += stats_.iterations;
+  }
   stats_.stepIterations = stepIterations_;
+  stats_.contacts = contacts_.activeCount();
   restoreMomentum(topology);
   // Coulomb friction at held particles, from the surface's impulse on each. Kept apart from Δv,
   // which warm-starts the next solve: folded into it, friction's change (a particle stopped dead,
@@ -394,8 +445,8 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
     holdFrictionChange_[i] =
         -(tangentialSpeed > slowdown ? slowdown / tangentialSpeed : Scalar(1)) * tangential;
   }
-  const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
   const Scalar* inverseMass = topology.inverseMass.data();
+  const Scalar maxSpeedSquared = topology.settings.maxSpeed * topology.settings.maxSpeed;
   std::atomic<bool> runaway{false};
   forEachParticle(topology.particleCount(), [&](Index i) {
     substepStart[i] = state.position[i];

@@ -61,6 +61,7 @@
 #include <Eigen/Core>
 
 #include "core/dynamics/chunk_phases.hpp"
+#include "core/dynamics/contact_springs.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/sliced_spring_matrix.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -75,6 +76,7 @@ struct ImplicitSolveStats {
   /// (stepAgain) solves twice.
   int stepIterations = 0;
   double relativeResidual = 0;  ///< |r| / |b − M·h·g| at the end (kGravityShare floors the latter)
+  std::size_t contacts = 0;     ///< contact springs active at the end of the latest step
 };
 
 class ImplicitEuler {
@@ -111,6 +113,14 @@ class ImplicitEuler {
                  std::span<Vec3> substepStart);
 
   const ImplicitSolveStats& lastSolve() const { return stats_; }
+
+  /// The contacts the next step keeps apart (contact_springs.hpp), found at the state it starts
+  /// from; they replace the previous step's.
+  void keepApart(std::span<const ContactStencil> stencils, const SceneTopology& topology) {
+    contacts_.set(stencils, topology.inverseMass.data());
+  }
+  /// Per stencil, whether the latest step's solve held it.
+  std::span<const char> contactsHeld() const { return contacts_.active(); }
 
   /// The latest step's Δv per particle, where the next solve starts from: part of what a
   /// checkpoint must carry for a resumed run to continue bit for bit.
@@ -165,6 +175,7 @@ class ImplicitEuler {
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
   std::vector<std::pair<double, double>> chunkSum_;
   ChunkPhases phases_;  ///< the solve's passes, in one parallel region
+  ContactSprings contacts_;
   /// Holds of the next step, per particle: the unit normal (zero when not held), the velocity
   /// along it, the friction coefficient; then the normal part of the residual during the solve.
   std::vector<Vec3> holdNormal_;

@@ -72,6 +72,12 @@ class ImplicitStepper final : public Stepper {
     return solver_.stepAgain(topology, dt, state, substepStart);
   }
 
+  bool keepsContactsApart() const override { return true; }
+  void keepApart(const SceneTopology& topology, std::span<const ContactStencil> stencils) override {
+    solver_.keepApart(stencils, topology);
+  }
+  std::span<const char> contactsHeld() const override { return solver_.contactsHeld(); }
+
   std::size_t endStep() override { return holds_.update(solver_); }
   std::span<std::int32_t> planeHolds() override { return holds_.touchedPlane(); }
   bool stableAtAnyStep() const override { return true; }

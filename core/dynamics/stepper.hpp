@@ -38,6 +38,13 @@ class Stepper {
   /// where the integrator holds nothing.
   virtual std::span<std::int32_t> planeHolds() { return {}; }
 
+  /// Whether step() keeps contacts apart within its solve (keepApart()).
+  virtual bool keepsContactsApart() const { return false; }
+  /// The contacts the next step keeps apart, found at the state it starts from.
+  virtual void keepApart(const SceneTopology&, std::span<const ContactStencil>) {}
+  /// Per stencil of the latest keepApart(), whether the latest step's solve held it.
+  virtual std::span<const char> contactsHeld() const { return {}; }
+
   /// Whether any step is stable, so that "auto" substeps follow contact accuracy alone.
   virtual bool stableAtAnyStep() const = 0;
   /// The fewest substeps "auto" may take (XPBD's springs soften past the explicit bound).

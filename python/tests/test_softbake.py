@@ -169,7 +169,7 @@ def test_contacts_match_the_contact_files(cli_bake, at_frame_10):
                  "bodies": tuple(c["bodies"]), "triangles": tuple(c["triangles"])}
                 for c in written["contacts"]]
     assert contacts == expected
-    assert {c["kind"] for c in contacts} <= {"edge-triangle", "particle-triangle", "corner"}
+    assert {c["kind"] for c in contacts} <= {"edge-triangle", "particle-triangle", "corner", "held"}
 
 
 # --- bit-identical to the command's OBJ ----------------------------------------------------------

@@ -54,14 +54,16 @@ double number(const std::map<std::string, std::string>& fields, const std::strin
 struct CsvRow {
   std::string broadPhase;
   long step = 0, frame = 0;
-  std::vector<double> stagesMs;  ///< forces … failsafe
+  std::vector<double> stagesMs;  ///< forces … contacts
   double stepMs = 0;
   long pairs = 0, contacts = 0;
 };
 
+/// The stages the header names, forces to contacts.
+constexpr int kStages = 9;
 constexpr const char* kCsvHeader =
     "broadphase,step,frame,forces_ms,integration_ms,boxes_ms,broad_phase_ms,narrow_phase_ms,"
-    "response_ms,planes_ms,failsafe_ms,step_ms,pairs,contacts";
+    "response_ms,planes_ms,failsafe_ms,contacts_ms,step_ms,pairs,contacts";
 
 std::vector<CsvRow> readCsv(const fs::path& path) {
   std::istringstream text(readFile(path));
@@ -73,16 +75,17 @@ std::vector<CsvRow> readCsv(const fs::path& path) {
     std::vector<std::string> cells;
     std::istringstream row(line);
     for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
-    EXPECT_EQ(cells.size(), 14u) << line;
-    if (cells.size() != 14) continue;
+    EXPECT_EQ(cells.size(), std::size_t(6 + kStages)) << line;
+    if (cells.size() != 6 + kStages) continue;
     CsvRow parsed;
     parsed.broadPhase = cells[0];
     parsed.step = std::stol(cells[1]);
     parsed.frame = std::stol(cells[2]);
-    for (int stage = 0; stage < 8; ++stage) parsed.stagesMs.push_back(std::stod(cells[3 + stage]));
-    parsed.stepMs = std::stod(cells[11]);
-    parsed.pairs = std::stol(cells[12]);
-    parsed.contacts = std::stol(cells[13]);
+    for (int stage = 0; stage < kStages; ++stage)
+      parsed.stagesMs.push_back(std::stod(cells[3 + stage]));
+    parsed.stepMs = std::stod(cells[3 + kStages]);
+    parsed.pairs = std::stol(cells[4 + kStages]);
+    parsed.contacts = std::stol(cells[5 + kStages]);
     rows.push_back(parsed);
   }
   return rows;

@@ -1,0 +1,213 @@
+#include "core/collision/step_contacts.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/collision/detection.hpp"
+#include "core/collision/failsafe.hpp"
+
+namespace softbake {
+
+namespace {
+/// Chunks of candidate pairs: enough for TBB to balance uneven chunks.
+constexpr std::size_t kPairChunks = 128;
+}  // namespace
+
+StepContacts::StepContacts(const SceneTopology& topology, const CollisionGeometry& geometry)
+    : broadPhase_(makeBroadPhase(BroadPhaseKind::Bvh)) {
+  const Scalar skin = topology.settings.skin;
+  gap_.assign(geometry.surfaces.size(), skin);
+  for (std::size_t b = 0; b < topology.bodies.size(); ++b)
+    gap_[b] = std::max(skin, Scalar(openSurfaceThickness(topology, topology.bodies[b])));
+  predicted_.resize(topology.particleCount());
+  reach_.assign(geometry.particleCount + geometry.staticVertex.size(), 0);
+  vertexBoxes_.resize(reach_.size());
+  for (std::size_t v = geometry.particleCount; v < vertexBoxes_.size(); ++v) {
+    const Vec3& x = geometry.staticVertex[v - geometry.particleCount];
+    vertexBoxes_[v] = Box3(Vec3(x.array() - skin), Vec3(x.array() + skin));
+  }
+  boxes_.resize(geometry.triangleVertices.size());
+  vertexSurface_.assign(reach_.size(), 0);
+  for (std::size_t t = 0; t < geometry.triangleVertices.size(); ++t)
+    for (Index v : geometry.triangleVertices[t]) vertexSurface_[v] = geometry.triangleSurface[t];
+}
+
+void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeometry& geometry,
+                             std::span<const Vec3> start, Index v, Index triangle,
+                             std::vector<Found>& out) const {
+  const Triangle& corners = geometry.triangleVertices[triangle];
+  if (hasVertex(corners, v)) return;
+  const Index particles = geometry.particleCount;
+  const bool vertexFixed = v >= particles || topology.inverseMass[v] == 0;
+  bool triangleFixed = true;
+  for (Index c : corners)
+    triangleFixed = triangleFixed && (c >= particles || topology.inverseMass[c] == 0);
+  if (vertexFixed && triangleFixed) return;
+  const Vec3& a = geometry.vertex(start, corners[0]);
+  const Vec3& b = geometry.vertex(start, corners[1]);
+  const Vec3& c = geometry.vertex(start, corners[2]);
+  const Vec3& x = geometry.vertex(start, v);
+  const Vec3 ab = b - a, ac = c - a, ax = x - a;
+  Vec3 normal = ab.cross(ac);
+  const Scalar area2 = normal.norm();
+  if (!(area2 > 0)) return;
+  normal /= area2;
+  Scalar distance = normal.dot(ax);
+  const Index surface = geometry.triangleSurface[triangle];
+  if (distance < 0) {
+    // Behind a closed surface is inside it: tangled, or left to the response and the failsafe.
+    if (geometry.surfaceClosed[surface]) return;
+    normal = -normal;
+    distance = -distance;
+  }
+  const Index vertexSurface = vertexSurface_[v];
+  const Scalar gap = std::max(gap_[surface], gap_[vertexSurface]);
+  // The foot's barycentric coordinates (Ericson, Real-Time Collision Detection, §3.4).
+  const Scalar d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
+  const Scalar d20 = ax.dot(ab), d21 = ax.dot(ac);
+  const Scalar denominator = d00 * d11 - d01 * d01;
+  if (!(denominator > 0)) return;
+  const Scalar beta = (d11 * d20 - d01 * d21) / denominator;
+  const Scalar gamma = (d00 * d21 - d01 * d20) / denominator;
+  const Scalar alpha = 1 - beta - gamma;
+  if (alpha < -kFootTolerance || beta < -kFootTolerance || gamma < -kFootTolerance) return;
+  Scalar reach = reach_[v];
+  for (Index corner : corners) reach = std::max(reach, reach_[corner]);
+  // Where the predicted motion takes the vertex relative to the triangle's plane (held fixed),
+  // give or take its reach: beyond that, it cannot come within the gap over the step.
+  const auto predicted = [&](Index u) -> const Vec3& {
+    return u < particles ? predicted_[u] : geometry.staticVertex[u - particles];
+  };
+  const Scalar predictedDistance =
+      normal.dot(predicted(v) - alpha * predicted(corners[0]) - beta * predicted(corners[1]) -
+                 gamma * predicted(corners[2]));
+  if (std::min(distance, predictedDistance) > 2 * gap + 4 * reach) return;
+  ContactStencil stencil;
+  stencil.normal = normal;
+  const std::array<Index, 4> vertices{v, corners[0], corners[1], corners[2]};
+  const std::array<Scalar, 4> weights{1, -alpha, -beta, -gamma};
+  Scalar offset = -gap;
+  for (int k = 0; k < 4; ++k) {
+    if (vertices[k] >= particles) {
+      offset += weights[k] * normal.dot(geometry.vertex(start, vertices[k]));
+      continue;
+    }
+    stencil.particle[k] = vertices[k];
+    stencil.weight[k] = weights[k];
+  }
+  stencil.offset = offset;
+  stencil.friction =
+      Scalar(std::sqrt(double(geometry.friction[surface]) * geometry.friction[vertexSurface]));
+  out.push_back({(std::uint64_t(v) << 32) | triangle, stencil});
+}
+
+std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology,
+                                                   const CollisionGeometry& geometry,
+                                                   CollisionDetector& detector,
+                                                   const SimulationState& state, Scalar dt) {
+  const std::size_t particles = topology.particleCount();
+  const Vec3 fall = dt * dt * topology.settings.gravity;
+  const std::span<const Vec3> start = state.position;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particles, kParticleGrain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const Vec3& x = start[i];
+                        predicted_[i] = topology.inverseMass[i] == 0
+                                            ? x
+                                            : Vec3(x + dt * state.velocity[i] + fall);
+                      }
+                    });
+  // The reach: half of how far each particle's predicted travel departs from its body's mean
+  // travel, what the solve may change. A body moving as one (falling, flying) reaches no further
+  // than its swept boxes: grown by the whole travel, the boxes of 300 beads falling together in
+  // one body overlapped by the hundred million pairs.
+  tbb::parallel_for(std::size_t(0), topology.bodies.size(), [&](std::size_t b) {
+    const Body& body = topology.bodies[b];
+    const Index end = body.firstParticle + body.particleCount;
+    Vec3d sum = Vec3d::Zero();
+    for (Index i = body.firstParticle; i < end; ++i)
+      sum += (predicted_[i] - start[i]).cast<double>();
+    const Vec3 mean =
+        body.particleCount ? Vec3((sum / double(body.particleCount)).cast<Scalar>()) : Vec3::Zero();
+    for (Index i = body.firstParticle; i < end; ++i) {
+      reach_[i] = Scalar(0.5) * (predicted_[i] - start[i] - mean).norm();
+      const Scalar grow = topology.settings.skin + reach_[i];
+      Box3 box(start[i].cwiseMin(predicted_[i]), start[i].cwiseMax(predicted_[i]));
+      vertexBoxes_[i] = Box3(Vec3(box.min().array() - grow), Vec3(box.max().array() + grow));
+    }
+  });
+  // Every gap is at least the skin: an open body's thicker gap grows its own boxes.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, boxes_.size(), kTriangleGrain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                        const Triangle& corners = geometry.triangleVertices[t];
+                        Box3 box = vertexBoxes_[corners[0]];
+                        box.extend(vertexBoxes_[corners[1]]).extend(vertexBoxes_[corners[2]]);
+                        const Scalar extra =
+                            gap_[geometry.triangleSurface[t]] - topology.settings.skin;
+                        if (extra > 0) {
+                          box.min().array() -= extra;
+                          box.max().array() += extra;
+                        }
+                        boxes_[t] = box;
+                      }
+                    });
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, detector.flatPatches());
+  // Its own pair cache: these boxes are larger than the detector's by the step's travel, and
+  // sharing one cache, each would push the other's boxes out of it.
+  pairCache_.findPairs(*broadPhase_, input, pairs_);
+  detector.dropLeftAlone(geometry, pairs_);
+
+  const std::size_t chunks = std::min(kPairChunks, pairs_.size());
+  chunkFound_.reset(chunks);
+  if (chunks > 0) {
+    const std::size_t perChunk = (pairs_.size() + chunks - 1) / chunks;
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+      std::vector<Found>& out = chunkFound_[chunk];
+      const std::size_t end = std::min(pairs_.size(), (chunk + 1) * perChunk);
+      for (std::size_t k = chunk * perChunk; k < end; ++k) {
+        const TrianglePair& pair = pairs_[k];
+        for (Index v : geometry.triangleVertices[pair.first])
+          tryVertex(topology, geometry, start, v, pair.second, out);
+        for (Index v : geometry.triangleVertices[pair.second])
+          tryVertex(topology, geometry, start, v, pair.first, out);
+      }
+    });
+  }
+  chunkFound_.reserveLargest();
+  chunkFound_.join(found_);
+  // A vertex meets a triangle through each of its own triangles paired with it: one stencil.
+  std::sort(found_.begin(), found_.end(),
+            [](const Found& a, const Found& b) { return a.key < b.key; });
+  found_.erase(std::unique(found_.begin(), found_.end(),
+                           [](const Found& a, const Found& b) { return a.key == b.key; }),
+               found_.end());
+  stencils_.clear();
+  for (const Found& found : found_) stencils_.push_back(found.stencil);
+  return stencils_;
+}
+
+void StepContacts::appendHeld(const CollisionGeometry& geometry, std::span<const char> held,
+                              std::span<const Vec3> positions,
+                              std::vector<Contact>& contacts) const {
+  for (std::size_t s = 0; s < held.size() && s < found_.size(); ++s) {
+    if (!held[s]) continue;
+    const Index v = Index(found_[s].key >> 32), triangle = Index(found_[s].key & 0xffffffffu);
+    Contact contact;
+    contact.kind = ContactKind::Held;
+    contact.position = geometry.vertex(positions, v);
+    contact.normal = found_[s].stencil.normal;
+    contact.surfaceB = geometry.triangleSurface[triangle];
+    contact.triangleB = triangle;
+    if (v < geometry.particleCount) {
+      contact.particle = v;
+    }
+    contact.surfaceA = vertexSurface_[v];
+    contacts.push_back(contact);
+  }
+}
+
+}  // namespace softbake
