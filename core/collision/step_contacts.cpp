@@ -65,6 +65,16 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   }
   const Index vertexSurface = vertexSurface_[v];
   const Scalar gap = std::max(gap_[surface], gap_[vertexSurface]);
+  Scalar reach = reach_[v];
+  for (Index corner : corners) reach = std::max(reach, reach_[corner]);
+  const auto predicted = [&](Index u) -> const Vec3& {
+    return u < particles ? predicted_[u] : geometry.staticVertex[u - particles];
+  };
+  // Most candidates end here, before the foot: far from the plane through corner 0 at the start
+  // and as predicted. (The foot's plane point differs from corner 0's predicted one by at most
+  // the corners' departures from their body's mean travel, 4·reach.)
+  const Scalar planeDistance = normal.dot(predicted(v) - predicted(corners[0]));
+  if (std::min(distance, planeDistance) > 2 * gap + 8 * reach) return;
   // The foot's barycentric coordinates (Ericson, Real-Time Collision Detection, §3.4).
   const Scalar d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
   const Scalar d20 = ax.dot(ab), d21 = ax.dot(ac);
@@ -74,13 +84,8 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   const Scalar gamma = (d00 * d21 - d01 * d20) / denominator;
   const Scalar alpha = 1 - beta - gamma;
   if (alpha < -kFootTolerance || beta < -kFootTolerance || gamma < -kFootTolerance) return;
-  Scalar reach = reach_[v];
-  for (Index corner : corners) reach = std::max(reach, reach_[corner]);
   // Where the predicted motion takes the vertex relative to the triangle's plane (held fixed),
   // give or take its reach: beyond that, it cannot come within the gap over the step.
-  const auto predicted = [&](Index u) -> const Vec3& {
-    return u < particles ? predicted_[u] : geometry.staticVertex[u - particles];
-  };
   const Scalar predictedDistance =
       normal.dot(predicted(v) - alpha * predicted(corners[0]) - beta * predicted(corners[1]) -
                  gamma * predicted(corners[2]));
@@ -156,9 +161,7 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
                       }
                     });
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, detector.flatPatches());
-  // Its own pair cache: these boxes are larger than the detector's by the step's travel, and
-  // sharing one cache, each would push the other's boxes out of it.
-  pairCache_.findPairs(*broadPhase_, input, pairs_);
+  if (!detector.findCachedPairs(input, pairs_)) pairCache_.findPairs(*broadPhase_, input, pairs_);
   detector.dropLeftAlone(geometry, pairs_);
 
   const std::size_t chunks = std::min(kPairChunks, pairs_.size());
