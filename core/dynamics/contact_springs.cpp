@@ -200,11 +200,37 @@ std::size_t ContactSprings::update(const Vec3* v0, const Vec3* deltaV, Scalar h,
   return changed;
 }
 
-void ContactSprings::markBodies(const Index* particleBody, std::vector<char>& bodyTouched) const {
+void ContactSprings::joinBodies(const Index* particleBody, std::vector<Index>& group,
+                                std::vector<char>& held) const {
+  const auto find = [&](Index b) {
+    while (group[b] != b) b = group[b] = group[group[b]];
+    return b;
+  };
   for (std::size_t s = 0; s < stencils_.size(); ++s) {
     if (!active_[s]) continue;
-    for (Index p : stencils_[s].particle)
-      if (p != ContactStencil::kFixed) bodyTouched[particleBody[p]] = 1;
+    Index first = ContactStencil::kFixed;
+    bool fixed = false;
+    for (Index k = 0; k < 4; ++k) {
+      const Index p = stencils_[s].particle[k];
+      if (p == ContactStencil::kFixed) {
+        fixed = true;
+        continue;
+      }
+      const Index root = find(particleBody[p]);
+      if (first == ContactStencil::kFixed) {
+        first = root;
+      } else if (root != first) {
+        // The lower body is the root, so the groups come out the same whatever the order.
+        group[std::max(root, first)] = std::min(root, first);
+        first = std::min(root, first);
+      }
+    }
+    if (fixed && first != ContactStencil::kFixed) held[first] = 1;
+  }
+  // Flatten, and carry each held mark to its group's root.
+  for (Index b = 0; b < group.size(); ++b) {
+    group[b] = find(b);
+    if (held[b]) held[group[b]] = 1;
   }
 }
 

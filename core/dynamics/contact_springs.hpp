@@ -95,9 +95,11 @@ class ContactSprings {
   /// augmented-Lagrangian step: a spring stiff enough for its own particles yields under a whole
   /// body's load), and moves friction between sticking and sliding. Returns how many changed.
   std::size_t update(const Vec3* v0, const Vec3* deltaV, Scalar h, Scalar tolerance);
-  /// Marks in `bodyTouched` the bodies an active spring acts on: their momentum takes the
-  /// contact's impulse.
-  void markBodies(const Index* particleBody, std::vector<char>& bodyTouched) const;
+  /// Joins in `group` (per body, its group's lowest body; each body its own on entry) the bodies
+  /// an active spring couples, and marks in `held` those with a spring against a corner that
+  /// cannot move, which takes an outside impulse.
+  void joinBodies(const Index* particleBody, std::vector<Index>& group,
+                  std::vector<char>& held) const;
 
  private:
   /// Σ w_k·x_k over a stencil's corners that are particles.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <numeric>
 #include <tuple>
 
 #include "core/dynamics/for_each_particle.hpp"
@@ -55,7 +56,12 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       holdResidual_(topology.particleCount(), 0),
       holdFrictionChange_(topology.particleCount(), Vec3::Zero()),
       isHeld_(topology.particleCount(), 0),
-      bodyHeld_(topology.bodies.size(), 0) {
+      bodyHeld_(topology.bodies.size(), 0),
+      bodyFree_(topology.bodies.size(), 0),
+      bodyGroup_(topology.bodies.size(), 0),
+      groupHeld_(topology.bodies.size(), 0),
+      groupExcess_(topology.bodies.size(), Vec3d::Zero()),
+      groupMass_(topology.bodies.size(), 0.0) {
   static_assert(kChunk % SlicedSpringMatrix::kLanes == 0, "a chunk holds whole slices");
   held_.reserve(topology.particleCount());
   const std::size_t n = topology.particleCount();
@@ -93,6 +99,8 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       pinned = pinned || topology.inverseMass[i] == 0;
     if (!pinned && body.particleCount > 0) freeBodies_.push_back(b);
   }
+  bodyExcess_.assign(freeBodies_.size(), Vec3d::Zero());
+  bodyMass_.assign(freeBodies_.size(), 0.0);
 }
 
 void ImplicitEuler::hold(Index particle, const Vec3& normal, Scalar normalSpeed, Scalar friction) {
@@ -123,13 +131,15 @@ void ImplicitEuler::releaseHolds() {
 void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
   // Internal forces cancel within a body, in b and in A·Δv alike, so the exact solution changes a
   // free body's momentum by Σ b (its external impulse) alone. CG stops at a residual whose sum is
-  // not zero; the body's share of it, spread as one velocity, is removed. A body with held
-  // particles also takes the surface's impulses, which the residual's sum holds: left alone.
+  // not zero; the body's share of it, spread as one velocity, is removed. Contact springs between
+  // bodies are internal to the group of bodies they join (their weights sum to zero), so a group
+  // is restored as one. A body with held particles, a pin, or a spring against a static mesh also
+  // takes outside impulses, which the residual's sum holds: its group is left alone.
   std::fill(bodyHeld_.begin(), bodyHeld_.end(), 0);
   for (Index i : held_) bodyHeld_[topology.particleBody[i]] = 1;
-  contacts_.markBodies(topology.particleBody.data(), bodyHeld_);
+  std::iota(bodyGroup_.begin(), bodyGroup_.end(), Index(0));
+  contacts_.joinBodies(topology.particleBody.data(), bodyGroup_, bodyHeld_);
   tbb::parallel_for(std::size_t(0), freeBodies_.size(), [&](std::size_t k) {
-    if (bodyHeld_[freeBodies_[k]]) return;
     const Body& body = topology.bodies[freeBodies_[k]];
     const Index end = body.firstParticle + body.particleCount;
     Vec3d excess = Vec3d::Zero();
@@ -138,8 +148,32 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
       excess += rhs_[i].cast<double>() - double(topology.mass[i]) * deltaV_[i].cast<double>();
       mass += double(topology.mass[i]);
     }
-    const Vec3 correction = (excess / mass).cast<Scalar>();
-    for (Index i = body.firstParticle; i < end; ++i) deltaV_[i] += correction;
+    bodyExcess_[k] = excess;
+    bodyMass_[k] = mass;
+  });
+  // Per group, in body order: the same sums for any thread count. A group with a pinned body
+  // (not among the free ones) is held.
+  std::fill(groupExcess_.begin(), groupExcess_.end(), Vec3d::Zero());
+  std::fill(groupMass_.begin(), groupMass_.end(), 0.0);
+  std::fill(groupHeld_.begin(), groupHeld_.end(), 0);
+  std::fill(bodyFree_.begin(), bodyFree_.end(), 0);
+  for (Index b : freeBodies_) bodyFree_[b] = 1;
+  for (Index b = 0; b < bodyGroup_.size(); ++b) {
+    const Index group = bodyGroup_[b];
+    groupHeld_[group] |= char(bodyHeld_[b] || !bodyFree_[b]);
+  }
+  for (std::size_t k = 0; k < freeBodies_.size(); ++k) {
+    const Index group = bodyGroup_[freeBodies_[k]];
+    groupExcess_[group] += bodyExcess_[k];
+    groupMass_[group] += bodyMass_[k];
+  }
+  tbb::parallel_for(std::size_t(0), freeBodies_.size(), [&](std::size_t k) {
+    const Index group = bodyGroup_[freeBodies_[k]];
+    if (groupHeld_[group]) return;
+    const Body& body = topology.bodies[freeBodies_[k]];
+    const Vec3 correction = (groupExcess_[group] / groupMass_[group]).cast<Scalar>();
+    for (Index i = body.firstParticle; i < body.firstParticle + body.particleCount; ++i)
+      deltaV_[i] += correction;
   });
 }
 

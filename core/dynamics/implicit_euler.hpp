@@ -184,6 +184,16 @@ class ImplicitEuler {
   std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
   std::vector<char> isHeld_;              ///< per particle: it has a hold
   std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
+  /// restoreMomentum()'s: per body whether it is free and its group (bodies joined by contact
+  /// springs, by their lowest body); per group whether it is held, its excess and its mass; per
+  /// free body its excess and mass.
+  std::vector<char> bodyFree_;
+  std::vector<Index> bodyGroup_;
+  std::vector<char> groupHeld_;
+  std::vector<Vec3d> groupExcess_;
+  std::vector<double> groupMass_;
+  std::vector<Vec3d> bodyExcess_;
+  std::vector<double> bodyMass_;
   /// The bulk terms: the bodies with one; per body its index among them (kNoVolumeBody if none);
   /// the runs of their particles within a chunk, in particle order, and each chunk's first run;
   /// per triangle a third of its ∂V/∂x, per particle g_i (zero where pinned); per run its latest

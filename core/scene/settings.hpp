@@ -103,8 +103,8 @@ struct CollisionSettings {
   /// The implicit integrator keeps the contacts it finds before each step apart within its solve
   /// (core/dynamics/contact_springs.hpp), and "auto" substeps let surfaces close by a whole short
   /// edge per substep; the paper's test and response, then the failsafe, check and repair the
-  /// result. Off (for now the default, until momentum is restored per group of bodies in contact
-  /// and the contact tests are measured with it): they alone answer every contact, after the step.
+  /// result. Off (for now the default, until the contact suite passes with it on: see
+  /// bench/results/integrators.md): they alone answer every contact, after the step.
   bool contactsInStep = false;
 };
 
