@@ -99,6 +99,7 @@ ImplicitEuler::ImplicitEuler(const SceneTopology& topology)
       pinned = pinned || topology.inverseMass[i] == 0;
     if (!pinned && body.particleCount > 0) freeBodies_.push_back(b);
   }
+  for (Index b : freeBodies_) bodyFree_[b] = 1;
   bodyExcess_.assign(freeBodies_.size(), Vec3d::Zero());
   bodyMass_.assign(freeBodies_.size(), 0.0);
 }
@@ -156,8 +157,6 @@ void ImplicitEuler::restoreMomentum(const SceneTopology& topology) {
   std::fill(groupExcess_.begin(), groupExcess_.end(), Vec3d::Zero());
   std::fill(groupMass_.begin(), groupMass_.end(), 0.0);
   std::fill(groupHeld_.begin(), groupHeld_.end(), 0);
-  std::fill(bodyFree_.begin(), bodyFree_.end(), 0);
-  for (Index b : freeBodies_) bodyFree_[b] = 1;
   for (Index b = 0; b < bodyGroup_.size(); ++b) {
     const Index group = bodyGroup_[b];
     groupHeld_[group] |= char(bodyHeld_[b] || !bodyFree_[b]);

@@ -188,7 +188,7 @@ TEST(SoftSoftImpact, ConservesMomentum) {
     for (int frame = 2; frame <= 12; ++frame) {
       simulator.advanceToFrame(frame);
       // Crossings the response answered, and contacts the solve held (contacts in the step).
-    contacts += simulator.lastFrameStats().contacts + simulator.lastFrameStats().heldContacts;
+      contacts += simulator.lastFrameStats().contacts + simulator.lastFrameStats().heldContacts;
       EXPECT_LT((momentum(simulator) - start).norm(), 1e-4 * scale) << "frame " << frame;
     }
     EXPECT_GT(contacts, 100u) << "the balls must meet";
