@@ -103,9 +103,9 @@ struct CollisionSettings {
   /// The implicit integrator keeps the contacts it finds before each step apart within its solve
   /// (core/dynamics/contact_springs.hpp), and "auto" substeps let surfaces close by a whole short
   /// edge per substep; the paper's test and response, then the failsafe, check and repair the
-  /// result. Off (for now the default, until the contact suite passes with it on: see
-  /// bench/results/integrators.md): they alone answer every contact, after the step.
-  bool contactsInStep = false;
+  /// result (4 substeps a frame where 19-23 were needed: bench/results/integrators.md). Off, or
+  /// under another integrator: they alone answer every contact, after the step.
+  bool contactsInStep = true;
 };
 
 struct SimulationSettings {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/collision/contact_accuracy.hpp"
 #include "core/dynamics/energy.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/mesh/mesh_topology.hpp"
@@ -116,6 +117,44 @@ TEST_P(RestingState, AtAutoSubstepsAgreesWithFourTimesAsMany) {
 INSTANTIATE_TEST_SUITE_P(Settling, RestingState, ::testing::Values("heavy_on_jelly"));
 
 INSTANTIATE_TEST_SUITE_P(PileAndFigure7, LargeSteps, ::testing::Values("balls10k", "fig7"));
+
+/// "auto" with the contacts in the step: surfaces may close by a whole short edge per substep, ten
+/// times what the contacts after the step allow, from the same closing speed. Two rubber balls
+/// 0.4 m apart, closing at 2 × `speed`.
+TEST(ContactsInStep, AutoSubstepsLetSurfacesCloseByAWholeShortEdge) {
+  const auto twoBalls = [](float speed, bool inStep) {
+    SceneSetup scene;
+    scene.settings.collisions.contactsInStep = inStep;
+    for (float x : {-0.6f, 0.6f}) {
+      BodySetup body;
+      body.name = x < 0 ? "left" : "right";
+      body.mesh = makeIcosphere(3, 0.4f, Vec3f(x, 2, 0));
+      body.material = *findMaterialPreset("rubber");
+      body.velocity = Vec3(x < 0 ? speed : -speed, 0, 0);
+      scene.bodies.push_back(body);
+    }
+    return buildSceneTopology(scene);
+  };
+  for (float speed : {6.0f, 30.0f}) {
+    const SceneTopology topology = twoBalls(speed, true);
+    const SubstepChoice after = Simulator(twoBalls(speed, false)).substeps();
+    const SubstepChoice inStep = Simulator(topology).substeps();
+    EXPECT_TRUE(inStep.automatic);
+    EXPECT_NEAR(inStep.closingSpeed, after.closingSpeed, 1e-6) << speed << " m/s";
+    EXPECT_NEAR(inStep.closingSpeed, speed, 1e-3) << speed << " m/s";
+    // The closing within a frame over a whole reach (skin and short edge), against a tenth of it.
+    const double reach = double(topology.settings.skin) + contactEdgeLength(topology);
+    const double frame = 1 / topology.settings.fps;
+    const auto expected = [&](double fraction) {
+      return std::clamp(int(std::ceil(speed * frame / (fraction * reach))), kMinAutoSubsteps,
+                        kMaxAutoSubsteps);
+    };
+    EXPECT_EQ(inStep.substeps, expected(1.0)) << speed << " m/s";
+    EXPECT_EQ(after.substeps, expected(0.1)) << speed << " m/s";
+    EXPECT_GT(inStep.substeps, kMinAutoSubsteps) << speed << " m/s";
+    EXPECT_LT(inStep.substeps, after.substeps) << speed << " m/s";
+  }
+}
 
 /// A ball resting on a ball, one step a frame, for 10 s: the energy never rises above its start.
 /// (Balanced on top, it may roll off; held on the lower ball for its first frames either way.)

@@ -272,7 +272,9 @@ TEST(InitialOverlap, SetAsideLeavesTheOverlapAloneWithoutMovingAnything) {
 
 /// Set-aside pairs collide once they are apart: a ball thrown out of another flies off, gravity
 /// (along −x here) brings it back, and the second time they meet they collide like any two bodies,
-/// staying apart.
+/// staying apart: no pair crosses, and their centres stay more than 0.7 apart (two balls of radius
+/// 0.5 squashed by 0.15 together, the deepest impact measured being 0.2; the ball, landing off
+/// centre, rolls off the other one and bounces on it until the end).
 TEST(InitialOverlap, SetAsidePairsCollideOnceTheyHaveSeparated) {
   SceneSetup scene = twoBalls(0.85f);
   scene.settings.gravity = Vec3(-9.81f, 0, 0);
@@ -287,6 +289,7 @@ TEST(InitialOverlap, SetAsidePairsCollideOnceTheyHaveSeparated) {
   ASSERT_FALSE(simulator.initialOverlaps().empty());
   int apartFrom = 0;
   std::size_t contactsAfter = 0;
+  double closest = 1e9;
   for (int frame = 2; frame <= 48; ++frame) {
     simulator.advanceToFrame(frame);
     const std::size_t pairs =
@@ -296,16 +299,18 @@ TEST(InitialOverlap, SetAsidePairsCollideOnceTheyHaveSeparated) {
     if (apartFrom > 0) {
       EXPECT_EQ(pairs, 0u) << "frame " << frame << ": they met again and passed into each other";
       EXPECT_EQ(simulator.lastFrameStats().setAsidePairs, 0u) << "frame " << frame;
-      contactsAfter += simulator.lastFrameStats().contacts;
+      contactsAfter +=
+          simulator.lastFrameStats().contacts + simulator.lastFrameStats().heldContacts;
+      closest = std::min(closest, double((centroid(simulator.state(), topology.bodies[1]) -
+                                          centroid(simulator.state(), topology.bodies[0]))
+                                             .norm()));
     }
   }
   ASSERT_GT(apartFrom, 0) << "never apart";
   EXPECT_LE(apartFrom, 4) << "thrown at 3 m/s out of a 0.15 m overlap";
   EXPECT_GT(contactsAfter, 20u) << "they met the second time";
-  const double distance = (centroid(simulator.state(), topology.bodies[1]) -
-                           centroid(simulator.state(), topology.bodies[0]))
-                              .norm();
-  EXPECT_GT(distance, 0.95) << "at rest against each other, not inside";
+  EXPECT_LT(closest, 0.95) << "they met the second time";
+  EXPECT_GT(closest, 0.7) << "pressed together, not one into the other";
 }
 
 /// A mesh that crosses itself, with self-collision on, dropped on the ground: not blown up, not

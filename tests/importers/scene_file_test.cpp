@@ -353,7 +353,8 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   const SceneFile scene = parse(R"({
     "settings": {"collisions": {"broadphase": "bvh", "levels": 2, "response": "paper",
                                 "restitution": 0.5, "friction": 0.1,
-                                "initial_overlap": "ignore", "failsafe": false}},
+                                "initial_overlap": "ignore", "failsafe": false,
+                                "contacts_in_step": false}},
     "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true}],
     "output": {"contacts": true}
   })");
@@ -365,8 +366,11 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   EXPECT_FLOAT_EQ(collisions.friction, 0.1f);
   EXPECT_EQ(collisions.initialOverlap, InitialOverlapMode::Ignore);
   EXPECT_FALSE(collisions.failsafe);
-  EXPECT_TRUE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
-                  .setup.settings.collisions.failsafe);
+  EXPECT_FALSE(collisions.contactsInStep);
+  const CollisionSettings defaults =
+      parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})").setup.settings.collisions;
+  EXPECT_TRUE(defaults.failsafe);
+  EXPECT_TRUE(defaults.contactsInStep);
   EXPECT_EQ(scene.setup.bodies[0].selfCollision, std::optional<bool>(true));
   EXPECT_TRUE(scene.output.contacts);
   EXPECT_FALSE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
