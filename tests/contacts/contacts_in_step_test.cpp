@@ -19,6 +19,7 @@
 #include "core/simulator.hpp"
 #include "importers/bench_scenes.hpp"
 #include "importers/scene_file.hpp"
+#include "tests/core/test_worlds.hpp"
 #include "tests/support/intersection_checker.hpp"
 
 namespace softbake {
@@ -123,16 +124,9 @@ INSTANTIATE_TEST_SUITE_P(PileAndFigure7, LargeSteps, ::testing::Values("balls10k
 /// 0.4 m apart, closing at 2 × `speed`.
 TEST(ContactsInStep, AutoSubstepsLetSurfacesCloseByAWholeShortEdge) {
   const auto twoBalls = [](float speed, bool inStep) {
-    SceneSetup scene;
+    SceneSetup scene =
+        test::twoBallsOnX(*findMaterialPreset("rubber"), Vec3(speed, 0, 0), Vec3(-speed, 0, 0));
     scene.settings.collisions.contactsInStep = inStep;
-    for (float x : {-0.6f, 0.6f}) {
-      BodySetup body;
-      body.name = x < 0 ? "left" : "right";
-      body.mesh = makeIcosphere(3, 0.4f, Vec3f(x, 2, 0));
-      body.material = *findMaterialPreset("rubber");
-      body.velocity = Vec3(x < 0 ? speed : -speed, 0, 0);
-      scene.bodies.push_back(body);
-    }
     return buildSceneTopology(scene);
   };
   for (float speed : {6.0f, 30.0f}) {

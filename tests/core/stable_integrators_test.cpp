@@ -142,18 +142,11 @@ TEST(ImplicitContactHolds, ABallLandingAtOneSubstepAFrameKeepsItsVolume) {
 /// both follow the same rule (a tenth of the reach per substep); the implicit one's rule with the
 /// contacts in the step is tested in contacts_in_step_test.
 SceneSetup twoBalls(IntegratorKind integrator, const Vec3& velocity, bool towardEachOther) {
-  SceneSetup scene;
+  Vec3 right = velocity;
+  if (towardEachOther) right.x() = -velocity.x();
+  SceneSetup scene = test::twoBallsOnX(*findMaterialPreset("jelly"), velocity, right);
   scene.settings.integrator = integrator;
   scene.settings.collisions.contactsInStep = false;
-  for (float x : {-0.6f, 0.6f}) {
-    BodySetup body;
-    body.name = x < 0 ? "left" : "right";
-    body.mesh = makeIcosphere(3, 0.4f, Vec3f(x, 2, 0));
-    body.material = *findMaterialPreset("jelly");
-    body.velocity = velocity;
-    if (x > 0 && towardEachOther) body.velocity.x() = -velocity.x();
-    scene.bodies.push_back(body);
-  }
   scene.planes.push_back(PlaneCollider{});
   return scene;
 }

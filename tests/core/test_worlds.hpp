@@ -73,6 +73,22 @@ inline SceneSetup ballScene(const Material& material, int subdivisions = 3, floa
   return scene;
 }
 
+/// Two icosphere balls of radius 0.4 at x = ±0.6, 2 m up, named "left" and "right", with their own
+/// velocities; no gravity change, no ground.
+inline SceneSetup twoBallsOnX(const Material& material, const Vec3& leftVelocity,
+                              const Vec3& rightVelocity) {
+  SceneSetup scene;
+  for (float x : {-0.6f, 0.6f}) {
+    BodySetup body;
+    body.name = x < 0 ? "left" : "right";
+    body.mesh = makeIcosphere(3, 0.4f, Vec3f(x, 2, 0));
+    body.material = material;
+    body.velocity = x < 0 ? leftVelocity : rightVelocity;
+    scene.bodies.push_back(body);
+  }
+  return scene;
+}
+
 inline Vec3d centroid(const SimulationState& state) {
   Vec3d sum = Vec3d::Zero();
   for (const Vec3& p : state.position) sum += p.cast<double>();
