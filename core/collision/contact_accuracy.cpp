@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include "core/union_find.hpp"
+
 namespace softbake {
 
 namespace {
@@ -96,14 +98,11 @@ ContactAccuracy contactAccuracySubsteps(const SceneTopology& topology,
   std::vector<std::uint32_t>& group = scratch.group;
   group.resize(motion.size());
   for (std::size_t s = 0; s < group.size(); ++s) group[s] = std::uint32_t(s);
-  const auto root = [&](std::uint32_t s) {
-    while (group[s] != s) s = group[s] = group[group[s]];
-    return s;
-  };
+  const auto root = [&](std::uint32_t s) { return findRoot(group, s); };
   for (const TrianglePair& pair : touching) {
     const std::uint32_t a = root(std::uint32_t(geometry.triangleSurface[pair.first]));
     const std::uint32_t b = root(std::uint32_t(geometry.triangleSurface[pair.second]));
-    if (a != b) group[std::max(a, b)] = std::min(a, b);
+    if (a != b) joinRoots(group, a, b);
   }
   std::vector<char>& held = scratch.held;
   held.assign(motion.size(), 0);

@@ -11,6 +11,7 @@
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
+#include "core/union_find.hpp"
 
 namespace softbake {
 
@@ -445,11 +446,7 @@ void CollisionFailsafe::keepAbovePlanes(const SceneTopology& topology, Simulatio
 }
 
 Index CollisionFailsafe::zoneOf(Index v) {
-  while (zoneParent_[v] != v) {
-    zoneParent_[v] = zoneParent_[zoneParent_[v]];
-    v = zoneParent_[v];
-  }
-  return v;
+  return findRoot(zoneParent_, v);
 }
 
 std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
@@ -478,10 +475,9 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
         root = r;
       } else if (r != root) {
         // The lower index becomes the root, so zones do not depend on the order of meetings.
-        const Index low = std::min(r, root), high = std::max(r, root);
-        zoneParent_[high] = low;
-        zoneFixed_[low] = zoneFixed_[low] || zoneFixed_[high];
-        root = low;
+        const Index high = std::max(r, root);
+        root = joinRoots(zoneParent_, r, root);
+        zoneFixed_[root] = zoneFixed_[root] || zoneFixed_[high];
       }
     }
     if (root != ~Index(0) && fixed) zoneFixed_[root] = 1;

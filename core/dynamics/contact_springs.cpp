@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/union_find.hpp"
+
 namespace softbake {
 
 void ContactSprings::set(std::span<const ContactStencil> stencils, const Scalar* inverseMass) {
@@ -202,10 +204,6 @@ std::size_t ContactSprings::update(const Vec3* v0, const Vec3* deltaV, Scalar h,
 
 void ContactSprings::joinBodies(const Index* particleBody, std::vector<Index>& group,
                                 std::vector<char>& held) const {
-  const auto find = [&](Index b) {
-    while (group[b] != b) b = group[b] = group[group[b]];
-    return b;
-  };
   for (std::size_t s = 0; s < stencils_.size(); ++s) {
     if (!active_[s]) continue;
     Index first = ContactStencil::kFixed;
@@ -216,22 +214,16 @@ void ContactSprings::joinBodies(const Index* particleBody, std::vector<Index>& g
         fixed = true;
         continue;
       }
-      const Index root = find(particleBody[p]);
+      const Index root = findRoot(group, particleBody[p]);
       if (first == ContactStencil::kFixed) {
         first = root;
       } else if (root != first) {
-        // The lower body is the root, so the groups come out the same whatever the order.
-        group[std::max(root, first)] = std::min(root, first);
-        first = std::min(root, first);
+        first = joinRoots(group, root, first);
       }
     }
     if (fixed && first != ContactStencil::kFixed) held[first] = 1;
   }
-  // Flatten, and carry each held mark to its group's root.
-  for (Index b = 0; b < group.size(); ++b) {
-    group[b] = find(b);
-    if (held[b]) held[group[b]] = 1;
-  }
+  for (Index b = 0; b < group.size(); ++b) group[b] = findRoot(group, b);
 }
 
 }  // namespace softbake

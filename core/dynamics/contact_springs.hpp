@@ -96,8 +96,9 @@ class ContactSprings {
   /// body's load), and moves friction between sticking and sliding. Returns how many changed.
   std::size_t update(const Vec3* v0, const Vec3* deltaV, Scalar h, Scalar tolerance);
   /// Joins in `group` (per body, its group's lowest body; each body its own on entry) the bodies
-  /// an active spring couples, and marks in `held` those with a spring against a corner that
-  /// cannot move, which takes an outside impulse.
+  /// an active spring couples, and marks in `held` a body of each group with a spring against a
+  /// corner that cannot move: the group takes an outside impulse (restoreMomentum() takes a group
+  /// as held when any of its bodies is marked).
   void joinBodies(const Index* particleBody, std::vector<Index>& group,
                   std::vector<char>& held) const;
 
