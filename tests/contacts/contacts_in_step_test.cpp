@@ -121,7 +121,8 @@ INSTANTIATE_TEST_SUITE_P(PileAndFigure7, LargeSteps, ::testing::Values("balls10k
 
 /// "auto" with the contacts in the step: surfaces may close by a whole short edge per substep, ten
 /// times what the contacts after the step allow, from the same closing speed. Two rubber balls
-/// 0.4 m apart, closing at 2 × `speed`.
+/// 0.4 m apart, each at `speed` toward the other; the rule's closing speed is the faster body's
+/// fastest vertex, `speed`.
 TEST(ContactsInStep, AutoSubstepsLetSurfacesCloseByAWholeShortEdge) {
   const auto twoBalls = [](float speed, bool inStep) {
     SceneSetup scene =
