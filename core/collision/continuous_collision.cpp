@@ -121,6 +121,28 @@ std::optional<Impact> firstMeeting(const LinearVector& u, const LinearVector& v,
   return std::nullopt;
 }
 
+/// How far, at most, any point of one primitive moves relative to any point of the other over the
+/// substep: the largest |Δx_i − Δx_j| over a point i of the first and a point j of the second
+/// (their points are convex combinations of their corners, so no pair of points moves more).
+template <std::size_t N, std::size_t M>
+double mostRelativeTravel(const std::array<const PointPath*, N>& first,
+                          const std::array<const PointPath*, M>& second) {
+  double most = 0;
+  for (const PointPath* i : first)
+    for (const PointPath* j : second)
+      most = std::max(most, ((i->end - i->start) - (j->end - j->start)).squaredNorm());
+  return std::sqrt(most);
+}
+
+/// True when two primitives `startDistance` apart cannot come within `tolerance` over the substep:
+/// their distance falls by at most their relative travel. Most candidate pairs of an assembly
+/// whose parts move together end here, before the cubic, whose near-zero coefficients (fitted,
+/// coplanar faces) the Bernstein bound cannot reject. The margin keeps rounding on the side of
+/// testing.
+bool outOfReach(double startDistance, double relativeTravel, double tolerance) {
+  return startDistance > tolerance * (1 + 1e-6) + relativeTravel * (1 + 1e-9);
+}
+
 }  // namespace
 
 Vec3d closestPointBarycentric(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
@@ -199,6 +221,9 @@ double triangleDistance(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3
 
 std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, const PointPath& b,
                                        const PointPath& c, double tolerance) {
+  if (outOfReach(pointTriangleDistance(p.start, a.start, b.start, c.start),
+                 mostRelativeTravel<1, 3>({&p}, {&a, &b, &c}), tolerance))
+    return std::nullopt;
   const LinearVector ab = difference(b, a), ac = difference(c, a), ap = difference(p, a);
   return firstMeeting(ab, ac, ap, tolerance, {&p, &a, &b, &c},
                       [&](double t) -> std::optional<Impact> {
@@ -214,6 +239,9 @@ std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, c
 
 std::optional<Impact> edgeEdgeImpact(const PointPath& p0, const PointPath& p1, const PointPath& q0,
                                      const PointPath& q1, double tolerance) {
+  if (outOfReach(segmentDistance(p0.start, p1.start, q0.start, q1.start),
+                 mostRelativeTravel<2, 2>({&p0, &p1}, {&q0, &q1}), tolerance))
+    return std::nullopt;
   const LinearVector dp = difference(p1, p0), dq = difference(q1, q0), r = difference(q0, p0);
   return firstMeeting(
       dp, dq, r, tolerance, {&p0, &p1, &q0, &q1}, [&](double t) -> std::optional<Impact> {

@@ -3,13 +3,16 @@
 /// a substep at which a vertex meets a moving triangle, or an edge meets another edge, when every
 /// point moves on a straight line from its start to its end.
 ///
-/// Four points are coplanar where the cubic f(t) = ((x1 − x0) × (x2 − x0)) · (x3 − x0) vanishes.
-/// Its Bernstein coefficients bound it on [0, 1], so most primitive pairs are rejected by four
-/// numbers before any root is sought. Otherwise the roots are bracketed between the extrema of the
-/// cubic and bisected, and at each in time order the two primitives' true distance is measured:
-/// within `tolerance` is a hit. Near-coplanar extrema that never reach zero are measured too, so a
-/// vertex grazing a face within the tolerance is not lost to rounding. Everything is computed in
-/// double precision from the (possibly single-precision) positions.
+/// A pair whose distance at the start exceeds the tolerance by more than its points' relative
+/// travel cannot meet, and is rejected first: an assembly's parts falling together move little
+/// relative to each other. Four points are coplanar where the cubic
+/// f(t) = ((x1 − x0) × (x2 − x0)) · (x3 − x0) vanishes. Its Bernstein coefficients bound it on
+/// [0, 1], so most other primitive pairs are rejected by four numbers before any root is sought.
+/// Otherwise the roots are bracketed between the extrema of the cubic and bisected, and at each in
+/// time order the two primitives' true distance is measured: within `tolerance` is a hit.
+/// Near-coplanar extrema that never reach zero are measured too, so a vertex grazing a face within
+/// the tolerance is not lost to rounding. Everything is computed in double precision from the
+/// (possibly single-precision) positions.
 ///
 /// A hit carries the weights that turn the primitives' points into the contact point on each side
 /// (a vertex: 1; a face: minus its barycentric coordinates; an edge: its end weights, negated on

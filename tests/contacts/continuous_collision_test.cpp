@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
+#include <functional>
 #include <random>
 
 #include "tests/support/exact_geometry.hpp"
@@ -185,6 +186,63 @@ TEST_F(RandomMotions, EdgeEdgeMeetingsAgreeWithASampledDistance) {
         meetings);
   }
   EXPECT_GE(meetings, 1000);
+}
+
+/// Primitives carried along together by one large motion, each point with a small motion of its
+/// own, and started within a few times (tolerance + that motion) of each other: the pairs the
+/// distance bound may reject before the cubic. Every pair the sampled distance brings within half
+/// the tolerance must be found, and every pair found must be one.
+TEST_F(RandomMotions, PrimitivesMovingTogetherMeetExactlyWhenTheirSampledDistanceSaysSo) {
+  constexpr double kJitter = 1e-5;
+  std::uniform_real_distribution<double> reach(0, 2 * (kTolerance + 2 * kJitter));
+  const auto carried = [&](const Vec3d& start, const Vec3d& common) {
+    return PointPath{start, start + common + kJitter * point() / std::sqrt(3.0)};
+  };
+  int found = 0, close = 0, rejected = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const Vec3d common = point();
+    const Vec3d a0 = point(), b0 = point(), c0 = point();
+    const Vec3d normal = (b0 - a0).cross(c0 - a0).normalized();
+    if (!normal.allFinite()) continue;
+    std::optional<Impact> impact;
+    std::function<double(double)> distance;
+    PointPath a = carried(a0, common), b = carried(b0, common), c = carried(c0, common);
+    if (trial % 2 == 0) {
+      const PointPath p = carried((a0 + b0 + c0) / 3 + reach(random_) * normal, common);
+      impact = vertexFaceImpact(p, a, b, c, kTolerance);
+      distance = [=](double t) {
+        return pointTriangleDistance(p.at(t), a.at(t), b.at(t), c.at(t));
+      };
+    } else {
+      // An edge across the triangle's middle, lifted off it: the two edges' closest points are
+      // inside both.
+      const Vec3d lift = reach(random_) * normal, middle = (a0 + b0 + c0) / 3;
+      const Vec3d along = normal.cross(b0 - a0).normalized() * 0.1;
+      const PointPath q0 = carried(middle + lift - along, common);
+      const PointPath q1 = carried(middle + lift + along, common);
+      const PointPath m0 = carried(middle - 0.1 * (b0 - a0), common);
+      const PointPath m1 = carried(middle + 0.1 * (b0 - a0), common);
+      impact = edgeEdgeImpact(q0, q1, m0, m1, kTolerance);
+      distance = [=](double t) { return segmentDistance(q0.at(t), q1.at(t), m0.at(t), m1.at(t)); };
+    }
+    double closest = HUGE_VAL;
+    for (int i = 0; i <= kSamples; ++i) closest = std::min(closest, distance(double(i) / kSamples));
+    if (closest <= 0.5 * kTolerance) {
+      ++close;
+      EXPECT_TRUE(impact) << "trial " << trial << " comes within " << closest;
+    }
+    if (impact) {
+      ++found;
+      EXPECT_LE(distance(impact->t), 1.0001 * kTolerance) << trial;
+    } else if (distance(0) > kTolerance) {
+      ++rejected;
+    }
+  }
+  // Both sides of the bound are exercised: meetings found, and pairs apart at the start that
+  // never met.
+  EXPECT_GE(close, 150);
+  EXPECT_GE(found, close);
+  EXPECT_GE(rejected, 1000);
 }
 
 TEST(ClosestPointBarycentric, MatchesTheBruteForceDistance) {
