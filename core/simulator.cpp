@@ -165,7 +165,10 @@ void Simulator::updateSetAside() {
     // Let go only beyond the reach of two skins, where the boxes of the two no longer meet: a
     // fit that breathes by a little more than one skin was handed back and forth between the
     // failsafe and the response, whose lifts at the rims pushed stacked blocks off each other.
-    stillClose(collision_, state_.position, initiallyFitted_, 2 * fittedDistance(),
+    // A fit whose faces swap sides by rounding (they do, in every substep) is still a fit: let go
+    // as a crossing, it was handed to the response and to the contacts of the step, which pushed
+    // each of an engine's parts into the next.
+    stillClose(collision_, state_.position, initiallyFitted_, 2 * fittedDistance(), Crossing::Kept,
                setAsideScratch_);
     detector_.setFitted(setAsideScratch_);
   }

@@ -59,19 +59,21 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
     std::erase_if(candidates, [&](const TrianglePair& pair) {
       return geometry.triangleSurface[pair.first] == geometry.triangleSurface[pair.second];
     });
-    stillClose(geometry, positions, candidates, closeDistance, overlaps.close);
+    stillClose(geometry, positions, candidates, closeDistance, Crossing::Excluded, overlaps.close);
   }
   return overlaps;
 }
 
 void stillClose(const CollisionGeometry& geometry, std::span<const Vec3> positions,
-                std::span<const TrianglePair> from, Scalar distance,
+                std::span<const TrianglePair> from, Scalar distance, Crossing crossing,
                 std::vector<TrianglePair>& out) {
   const auto corners = [&](Index t) {
     const TriangleCorners c = geometry.corners(positions, t);
     return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
   };
   keepPairs(from, out, [&](const TrianglePair& pair, TrianglePairHits& hits) {
+    if (crossing == Crossing::Kept)
+      return triangleDistance(corners(pair.first), corners(pair.second)) < double(distance);
     return !geometry.trianglesCross(positions, pair.first, pair.second, hits) &&
            triangleDistance(corners(pair.first), corners(pair.second)) < double(distance);
   });

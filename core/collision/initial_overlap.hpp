@@ -61,10 +61,13 @@ InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
                                     const CollisionGeometry& geometry,
                                     std::span<const Vec3> positions, Scalar closeDistance = 0);
 
+/// Whether stillClose keeps pairs whose triangles intersect.
+enum class Crossing { Excluded, Kept };
+
 /// The pairs of `from` (sorted) whose triangles are closer than `distance` with the particles at
-/// `positions` and do not intersect, in order, into `out`.
+/// `positions`, in order, into `out`; with Crossing::Excluded, only those that do not intersect.
 void stillClose(const CollisionGeometry& geometry, std::span<const Vec3> positions,
-                std::span<const TrianglePair> from, Scalar distance,
+                std::span<const TrianglePair> from, Scalar distance, Crossing crossing,
                 std::vector<TrianglePair>& out);
 
 /// The pairs of `from` (sorted) whose triangles intersect with the particles at `positions`, in
