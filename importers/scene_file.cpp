@@ -151,7 +151,7 @@ class SceneParser {
   void parseCollisions(const JsonValue& value) {
     const JsonObject object =
         value.object({"broadphase", "levels", "response", "restitution", "friction", "pair_cache",
-                      "initial_overlap", "failsafe", "contacts_in_step"});
+                      "initial_overlap", "failsafe", "contacts_in_step", "self_collision"});
     CollisionSettings& collisions = scene_.setup.settings.collisions;
     if (auto broadPhase = object.find("broadphase")) {
       if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
@@ -171,6 +171,7 @@ class SceneParser {
     if (auto failsafe = object.find("failsafe")) collisions.failsafe = failsafe->boolean();
     if (auto inStep = object.find("contacts_in_step"))
       collisions.contactsInStep = inStep->boolean();
+    if (auto self = object.find("self_collision")) collisions.selfCollision = self->boolean();
     if (auto initialOverlap = object.find("initial_overlap")) {
       if (!parseInitialOverlapMode(initialOverlap->string(), collisions.initialOverlap))
         initialOverlap->fail(cat("expected ", alternatives(initialOverlapModeNames(), "\"")));

@@ -16,9 +16,9 @@
 /// What it leaves out is what the paper's line–triangle test and response, then the failsafe,
 /// still catch after the step: edge against edge, a vertex that slides over a triangle's edge, and
 /// whatever moved further than predicted. The pairs the detector leaves alone (set aside, fitted,
-/// ignored) are left alone here too, and so is a vertex the scene placed within the gap of a
-/// triangle (the failsafe's rule: the walls and fillets of a CAD part, fitted parts of an open
-/// body). Chunks of pairs write their own buffers, joined in order and sorted by (vertex,
+/// ignored) are left alone here too; a vertex its own surface placed within the gap of a triangle
+/// (the walls and fillets of a CAD part, a folded sheet) is kept no closer than it was placed.
+/// Chunks of pairs write their own buffers, joined in order and sorted by (vertex,
 /// triangle), so the stencils are the same for any thread count.
 
 #include <cstdint>

@@ -36,8 +36,9 @@ struct BodySetup {
   Scalar mass = 1;               ///< kg for the whole body, spread over particles by vertex area
   Vec3 velocity = Vec3::Zero();  ///< initial velocity of every particle, m/s
   Pins pins;
-  /// Collide the body with itself. Unset: on, open or closed (a flag folds onto itself, and a
-  /// closed body pressed into the ground or squeezed in a pile creases into itself).
+  /// Collide the body with itself. Unset: as the scene's CollisionSettings::selfCollision says
+  /// (on by default, open or closed: a flag folds onto itself, and a closed body pressed into the
+  /// ground or squeezed in a pile creases into itself).
   std::optional<bool> selfCollision;
 };
 

@@ -230,7 +230,7 @@ void addBody(SceneTopology& scene, const BodySetup& setup, BuildReport* report) 
   body.mass = setup.mass;
   body.initialVelocity = setup.velocity;
   body.closed = closed;
-  body.selfCollision = setup.selfCollision.value_or(true);
+  body.selfCollision = setup.selfCollision.value_or(scene.settings.collisions.selfCollision);
   body.restVolume = volume;
   body.gasAmount = closed ? double(setup.material.pressure) * volume : 0.0;
   body.firstParticle = Index(scene.restPosition.size());

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/mesh/mesh_topology.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/scene/scene_topology.hpp"
 #include "core/text.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/scene_file.hpp"
@@ -354,8 +355,9 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
     "settings": {"collisions": {"broadphase": "bvh", "levels": 2, "response": "paper",
                                 "restitution": 0.5, "friction": 0.1,
                                 "initial_overlap": "ignore", "failsafe": false,
-                                "contacts_in_step": false}},
-    "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true}],
+                                "contacts_in_step": false, "self_collision": false}},
+    "bodies": [{"mesh": {"primitive": "icosphere"}, "self_collision": true},
+               {"mesh": {"primitive": "icosphere"}, "transform": {"translate": [0, 3, 0]}}],
     "output": {"contacts": true}
   })");
   const CollisionSettings& collisions = scene.setup.settings.collisions;
@@ -367,10 +369,16 @@ TEST(SceneFile, ReadsTheCollisionKeys) {
   EXPECT_EQ(collisions.initialOverlap, InitialOverlapMode::Ignore);
   EXPECT_FALSE(collisions.failsafe);
   EXPECT_FALSE(collisions.contactsInStep);
+  EXPECT_FALSE(collisions.selfCollision);
+  // A body's own key wins; one without it takes the scene's.
+  const SceneTopology topology = buildSceneTopology(scene.setup);
+  EXPECT_TRUE(topology.bodies[0].selfCollision);
+  EXPECT_FALSE(topology.bodies[1].selfCollision);
   const CollisionSettings defaults =
       parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})").setup.settings.collisions;
   EXPECT_TRUE(defaults.failsafe);
   EXPECT_TRUE(defaults.contactsInStep);
+  EXPECT_TRUE(defaults.selfCollision);
   EXPECT_EQ(scene.setup.bodies[0].selfCollision, std::optional<bool>(true));
   EXPECT_TRUE(scene.output.contacts);
   EXPECT_FALSE(parse(R"({"bodies": [{"mesh": {"primitive": "icosphere"}}]})")
