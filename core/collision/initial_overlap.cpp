@@ -72,9 +72,8 @@ void stillClose(const CollisionGeometry& geometry, std::span<const Vec3> positio
     return std::array<Vec3d, 3>{c[0].cast<double>(), c[1].cast<double>(), c[2].cast<double>()};
   };
   keepPairs(from, out, [&](const TrianglePair& pair, TrianglePairHits& hits) {
-    if (crossing == Crossing::Kept)
-      return triangleDistance(corners(pair.first), corners(pair.second)) < double(distance);
-    return !geometry.trianglesCross(positions, pair.first, pair.second, hits) &&
+    return (crossing == Crossing::Kept ||
+            !geometry.trianglesCross(positions, pair.first, pair.second, hits)) &&
            triangleDistance(corners(pair.first), corners(pair.second)) < double(distance);
   });
 }
