@@ -173,6 +173,7 @@ class ImplicitEuler {
   /// deltaV_ and direction_, the product's inputs, have matrix_.paddedSize() entries; those past
   /// the particles are always 0.
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
+  bool warmStarted_ = false;  ///< deltaV_ holds a step's Δv, or a checkpoint's
   std::vector<std::pair<double, double>> chunkSum_;
   ChunkPhases phases_;  ///< the solve's passes, in one parallel region
   ContactSprings contacts_;
