@@ -36,6 +36,30 @@ StepContacts::StepContacts(const SceneTopology& topology, const CollisionGeometr
     for (Index v : geometry.triangleVertices[t]) vertexSurface_[v] = geometry.triangleSurface[t];
 }
 
+namespace {
+
+// How far the foot of `x` on the plane of (a, b, c) lies outside the triangle, past the edge it
+// is furthest past (a lower bound of its distance from the triangle); 0 on the triangle.
+Scalar footOutside(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& x) {
+  const Vec3 normal = (b - a).cross(c - a);
+  const Scalar area2 = normal.norm();
+  if (!(area2 > 0)) return 0;
+  // The foot's signed distance inside edge (p, q) is ((q - p) × (x - p)) · n / |q - p|, n the
+  // unit normal.
+  Scalar outside = 0;
+  const auto pastEdge = [&](const Vec3& p, const Vec3& q) {
+    const Vec3 edge = q - p;
+    const Scalar inside = edge.cross(x - p).dot(normal);
+    if (inside < 0) outside = std::max(outside, -inside / (area2 * edge.norm()));
+  };
+  pastEdge(a, b);
+  pastEdge(b, c);
+  pastEdge(c, a);
+  return outside;
+}
+
+}  // namespace
+
 void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeometry& geometry,
                              std::span<const Vec3> start, Index v, Index triangle,
                              std::vector<Found>& out) const {
@@ -58,7 +82,8 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   normal /= area2;
   Scalar distance = normal.dot(ax);
   const Index surface = geometry.triangleSurface[triangle];
-  if (distance < 0) {
+  const bool behind = distance < 0;
+  if (behind) {
     // Behind a closed surface is inside it: tangled, or left to the response and the failsafe.
     if (geometry.surfaceClosed[surface]) return;
     normal = -normal;
@@ -85,23 +110,54 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   const Scalar gamma = (d00 * d21 - d01 * d20) / denominator;
   const Scalar alpha = 1 - beta - gamma;
   if (alpha < -kFootTolerance || beta < -kFootTolerance || gamma < -kFootTolerance) return;
+  // The tolerance above is relative, so on a large triangle it reaches far past its edges: the
+  // walls of a house butting edge to edge in one plane each had their corners in the next wall's
+  // triangles, were held a gap out of that plane, and pushed each other for 20 s a step. A vertex
+  // whose foot lies outside the triangle by `outside` is at least that far from it: beyond the
+  // gap and its reach, at the start and as predicted, it needs no stencil.
+  const Scalar beyond = gap + 4 * reach;
+  const Scalar outside = footOutside(a, b, c, x);
+  if (outside > beyond && footOutside(predicted(corners[0]), predicted(corners[1]),
+                                      predicted(corners[2]), predicted(v)) > beyond)
+    return;
   // Where the predicted motion takes the vertex relative to the triangle's plane (held fixed),
   // give or take its reach: beyond that, it cannot come within the gap over the step.
   const Scalar predictedDistance =
       normal.dot(predicted(v) - alpha * predicted(corners[0]) - beta * predicted(corners[1]) -
                  gamma * predicted(corners[2]));
   if (std::min(distance, predictedDistance) > 2 * gap + 4 * reach) return;
-  // A vertex its own surface placed within the gap of the triangle (the walls and fillets of a
-  // CAD part, a folded sheet) is kept no closer than it was placed: held to the whole gap, each
-  // part pushed its own walls apart and into the next part, and an engine of 115 parts took four
-  // times as long a step. Fits between surfaces are the detector's fitted pairs, left out above.
+  // No stencil pushes a vertex the scene placed where it is. Off the triangle, the plane need only
+  // keep a vertex sqrt(gap² - lateral²) away for it to keep the gap from the triangle, lateral
+  // its foot's distance from the triangle: held to the whole gap, a house's parts were pushed
+  // apart from the first step in free fall (750 stencils held) and their fittings into
+  // themselves.
   Scalar keep = gap;
+  if (outside > 0) {
+    const double away = pointTriangleDistance(x.cast<double>(), a.cast<double>(),
+                                              b.cast<double>(), c.cast<double>());
+    const double lateral2 = std::max(0.0, away * away - double(distance) * distance);
+    keep = Scalar(std::sqrt(std::max(0.0, double(gap) * gap - lateral2)));
+  }
+  // A vertex its own surface placed within the gap of the triangle (the walls and fillets of a
+  // CAD part, a folded sheet) is kept no nearer its plane than it was placed there, measured along
+  // the normal as the stencil measures: held to the whole gap, each part pushed its own walls
+  // apart and into the next part, and an engine of 115 parts took four times as long a step. (A
+  // flat flag's vertices lie in the plane of all its triangles, but within the gap of few: its
+  // folds are held to the gap.) Fits between surfaces are the detector's fitted pairs, left out
+  // above.
   if (vertexSurface == surface) {
-    const auto rest = [&](Index u) {
-      return geometry.vertex(topology.restPosition, u).cast<double>();
+    const auto rest = [&](Index u) -> const Vec3& {
+      return geometry.vertex(topology.restPosition, u);
     };
-    keep = std::min(keep, Scalar(pointTriangleDistance(rest(v), rest(corners[0]), rest(corners[1]),
-                                                       rest(corners[2]))));
+    const auto restDouble = [&](Index u) -> Vec3d { return rest(u).cast<double>(); };
+    if (pointTriangleDistance(restDouble(v), restDouble(corners[0]), restDouble(corners[1]),
+                              restDouble(corners[2])) < gap) {
+      const Vec3 restNormal = (rest(corners[1]) - rest(corners[0]))
+                                  .cross(rest(corners[2]) - rest(corners[0]))
+                                  .normalized();
+      const Scalar placed = restNormal.dot(rest(v) - rest(corners[0]));
+      keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));
+    }
   }
   ContactStencil stencil;
   stencil.normal = normal;

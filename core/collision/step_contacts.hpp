@@ -9,9 +9,12 @@
 /// cache (any of the broad phases, the paper's subdivided boxes and box hash among them). Each
 /// candidate pair gives its corners against the other triangle: a vertex whose foot on the
 /// triangle's plane lies on the triangle, in front of it (outside, for a closed surface; on its
-/// side at the start, for an open one), and within the gap plus its reach is a stencil. The gap is
-/// the skin, or an open body's thickness (the failsafe's, so the two stages keep the same
-/// distance).
+/// side at the start, for an open one), and within the gap plus its reach is a stencil; a foot
+/// further off the triangle than the gap plus the reach, at the start and as predicted, is not.
+/// The gap is the skin, or an open body's thickness (the failsafe's, so the two stages keep the
+/// same distance). A stencil asks the plane to keep the vertex what keeps it the gap from the
+/// triangle: less when its foot lies off the triangle, and never more than the scene placed it
+/// from its own surface, so no stencil pushes a body that rests as the scene made it.
 ///
 /// What it leaves out is what the paper's line–triangle test and response, then the failsafe,
 /// still catch after the step: edge against edge, a vertex that slides over a triangle's edge, and
