@@ -25,7 +25,8 @@
 ///    merged into zones, and each zone moves as one over the substep, with its mean velocity
 ///    (momentum conserved). A translated zone cannot cross itself, zones that meet are merged,
 ///    and a zone that holds a pinned particle, a static vertex or a particle on a plane stays
-///    where it started. The zones grow until nothing meets.
+///    where it started. The zones grow until nothing meets. A translating pass that finds the very
+///    meetings of the pass before cannot part them, so the zones then stay where they started.
 /// 3. Should that still leave meetings after many passes, every particle stays where the substep
 ///    started: the state that was free of crossings. Counted, never expected.
 ///
@@ -165,6 +166,8 @@ class CollisionFailsafe {
                         std::span<const Vec3> start, SimulationState& state, bool stayAtStart);
   Index zoneOf(Index v);
   void clearZones();
+  /// Whether impacts_ holds the meetings of the latest translating zone pass.
+  bool sameMeetings() const;
 
   FailsafePasses passes_;
   double tolerance_, separation_;
@@ -183,6 +186,8 @@ class CollisionFailsafe {
   std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
   ChunkBuffers<FailsafeImpact> chunkImpacts_;
   std::vector<FailsafeImpact> impacts_;
+  /// The primitives of the latest translating zone pass's meetings, sorted as impacts_ is.
+  std::vector<std::array<Index, 4>> lastMeetings_;
   std::vector<std::uint8_t> moved_;          ///< per particle: moved by this failsafe's latest pass
   std::vector<std::uint8_t> triangleMoved_;  ///< per collision triangle: a corner in moved_
   std::vector<std::uint8_t> onPlane_;        ///< per particle: kept above a plane this substep
