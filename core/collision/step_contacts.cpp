@@ -133,8 +133,8 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // themselves.
   Scalar keep = gap;
   if (outside > 0) {
-    const double away = pointTriangleDistance(x.cast<double>(), a.cast<double>(),
-                                              b.cast<double>(), c.cast<double>());
+    const double away = pointTriangleDistance(x.cast<double>(), a.cast<double>(), b.cast<double>(),
+                                              c.cast<double>());
     const double lateral2 = std::max(0.0, away * away - double(distance) * distance);
     keep = Scalar(std::sqrt(std::max(0.0, double(gap) * gap - lateral2)));
   }

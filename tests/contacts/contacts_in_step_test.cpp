@@ -285,8 +285,8 @@ TEST(ContactsInStep, PartsFallingTogetherHoldNothingAndKeepTheirShapes) {
     mean /= double(body.particleCount);
     double departed = 0;
     for (Index i = body.firstParticle; i < end; ++i)
-      departed = std::max(departed,
-                          ((simulator.state().position[i] - start[i]).cast<double>() - mean).norm());
+      departed = std::max(
+          departed, ((simulator.state().position[i] - start[i]).cast<double>() - mean).norm());
     EXPECT_LT(departed, 1e-3 * skin) << body.name << ": m, the most a particle departed";
   }
 }
