@@ -60,7 +60,7 @@ std::vector<std::vector<std::array<std::uint32_t, 3>>> trianglesFromScene(const 
   const std::string source = (folder / "manifest.json").string();
   RunOptions run = runOptionsFromRecord(manifest.run, folder, source);
   SceneFile scene = loadSceneInput(run.input, run.load);
-  applyOverrides(run, scene);
+  applySceneOptions(run.given, scene);
   const std::vector<std::string> differences = runRecordDifferences(
       manifest.run, runRecord(run, scene, recordedCheckpointInterval(manifest.run)));
   if (!differences.empty())

@@ -277,9 +277,9 @@ int bench(const BenchOptions& options) {
   for (const std::optional<std::string>& requestedBroadPhase : broadPhases) {
     SceneFile scene = loaded;
     SimulationSettings& settings = scene.setup.settings;
-    SimulationOverrides overrides = options;
-    overrides.broadPhase = requestedBroadPhase;
-    applySimulationOverrides(overrides, settings);
+    applySceneOptions(options.given, scene);
+    if (options.frames) settings.frames = *options.frames;
+    if (requestedBroadPhase) parseBroadPhase(*requestedBroadPhase, settings.collisions.broadPhase);
     const std::string broadPhase(broadPhaseName(settings.collisions.broadPhase));
 
     Simulator simulator(buildSceneTopology(scene.setup));

@@ -59,7 +59,7 @@ int exportFrames(const ExportOptions& options) {
 
   // The run's scene, rebuilt as it was: the files it read must not have changed since.
   SceneFile scene = loadSceneInput(run.input, run.load);
-  applyOverrides(run, scene);
+  applySceneOptions(run.given, scene);
   const int checkpointEvery = recordedCheckpointInterval(manifest.run);
   const std::vector<std::string> differences =
       runRecordDifferences(manifest.run, runRecord(run, scene, checkpointEvery));
@@ -84,8 +84,8 @@ int exportFrames(const ExportOptions& options) {
   run.cache = false;  // read, not written
   const std::shared_ptr<const SceneTopology> topology =
       std::make_shared<const SceneTopology>(buildSceneTopology(scene.setup));
-  if (options.contactsView) run.contactsView = options.contactsView;  // after the record's check
-  const RenderOptions render = renderOptions(run, scene.render);
+  if (options.contactsView) scene.render.contactsView = options.contactsView;  // after the check
+  const RenderOptions render = renderOptions(scene.render);
   std::optional<VdbOptions> vdb;
   if (scene.output.vdb) vdb = vdbOptions(run, *topology);
   const CacheLayout cache(options.out, scene.setup.name, manifest.framePadding);

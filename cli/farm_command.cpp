@@ -81,7 +81,7 @@ int farmSlurmCommand(const FarmOptions& options) {
     }
     for (FarmVariant& variant : variants) {
       SceneFile scene = loadSceneInput(variant.scene, options.run.load);
-      applyOverrides(options.run, scene);
+      applySceneOptions(options.run.given, scene);
       variant.frames = scene.setup.settings.frames;
       if (variant.name.empty()) variant.name = scene.setup.name;
       const int tasks = (variant.frames + options.chunk - 1) / options.chunk;

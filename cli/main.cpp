@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <system_error>
 
@@ -35,70 +36,62 @@
 
 namespace {
 
-/// `--substeps`: "auto" or a whole number of at least 1; the message CLI11 shows otherwise.
-std::string checkSubsteps(const std::string& value) {
-  if (value == "auto") return {};
-  try {
-    std::size_t used = 0;
-    const int count = std::stoi(value, &used);
-    if (used == value.size() && count >= 1) return {};
-  } catch (...) {
+/// What CLI11's help shows for a value of `spec`.
+std::string typeName(const softbake::OptionSpec& spec) {
+  switch (spec.kind) {
+    case softbake::OptionKind::Whole:
+      return "INT";
+    case softbake::OptionKind::Number:
+      return "NUMBER";
+    case softbake::OptionKind::Choice:
+      return "{" + CLI::detail::join(spec.choices(), ",") + "}";
+    case softbake::OptionKind::Substeps:
+      return "auto|INT";
+    case softbake::OptionKind::ImageSize:
+      return "WIDTHxHEIGHT";
+    case softbake::OptionKind::Path:
+      return "DIR";
+    case softbake::OptionKind::Flag:
+      break;
   }
-  return "expected 'auto' or a whole number >= 1, got '" + value + "'";
+  return "";
 }
 
-/// A number above zero; CLI11's PositiveNumber would print the largest double as its bound.
-const CLI::Validator positiveNumber(
-    [](std::string& value) -> std::string {
-      try {
-        std::size_t used = 0;
-        const double number = std::stod(value, &used);
-        if (used == value.size() && number > 0 && std::isfinite(number)) return {};
-      } catch (...) {
-      }
-      return "expected a number > 0, got '" + value + "'";
-    },
-    "NUMBER > 0");
-
-/// The options `run` and `bench` both take for reading their input.
-void addLoadOptions(CLI::App& command, softbake::SceneLoadOptions& load) {
-  command.add_flag("--accept-lossy-import", load.acceptLossyImport,
-                   "import what is left of a mesh file that lost geometry on the way (faces "
-                   "assimp dropped, unused vertices, fewer rows than the header says), with a "
-                   "warning, instead of refusing it");
-  const softbake::ImportLimits defaults;
-  command
-      .add_option("--max-vertices", load.maxVertices,
-                  "most vertices one mesh file may bring in (default " +
-                      std::to_string(defaults.maxVertices) + ")")
-      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
-  command
-      .add_option("--max-faces", load.maxFaces,
-                  "most triangles one mesh file may bring in (default " +
-                      std::to_string(defaults.maxFaces) + ")")
-      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 62));
-  command
-      .add_option("--max-import-memory", load.maxImportMemoryMib,
-                  "most memory one mesh file's import may take, MiB; the process reading it "
-                  "with assimp is held to it too (default: half of this machine's memory)")
-      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 40));
-  command
-      .add_option("--max-import-seconds", load.maxImportSeconds,
-                  "most seconds reading one mesh file with assimp may take (default " +
-                      std::to_string(defaults.maxSeconds) + ")")
-      ->check(CLI::Range(std::uint64_t(1), softbake::kMaxImportSeconds));
-  command.add_option("--max-bodies", load.maxBodies, "most bodies the scene may have")
-      ->capture_default_str()
-      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
+/// The options of the option table that `command` takes, added to `app`; each writes its value,
+/// checked as the table checks it, into `given`.
+void addTableOptions(CLI::App& app, unsigned command, softbake::GivenOptions& given) {
+  std::map<std::string_view, CLI::Option*> added;
+  for (const softbake::OptionSpec& spec : softbake::optionTable()) {
+    if (!(spec.commands & command)) continue;
+    const std::string names =
+        spec.shortFlag.empty() ? spec.flag() : std::string(spec.shortFlag) + "," + spec.flag();
+    std::string help(spec.help);
+    if (!spec.defaultText.empty()) help += " (default " + spec.defaultText + ")";
+    const std::string name(spec.name);
+    if (spec.kind == softbake::OptionKind::Flag) {
+      added[spec.name] = app.add_flag_callback(
+          names, [&given, name] { given[name] = true; }, help);
+      continue;
+    }
+    const CLI::Validator check(
+        [&spec](std::string& text) -> std::string {
+          const auto error = softbake::checkOptionValue(spec, optionValueFromText(spec, text));
+          return error ? error->message + ", got '" + text + "'" : std::string();
+        },
+        "", "");
+    added[spec.name] = app.add_option_function<std::string>(
+                              names,
+                              [&given, &spec, name](const std::string& text) {
+                                given[name] = optionValueFromText(spec, text);
+                              },
+                              help)
+                           ->check(check)
+                           ->type_name(typeName(spec));
+  }
+  for (const softbake::OptionSpec& spec : softbake::optionTable())
+    if (added.count(spec.name) && added.count(spec.excludes))
+      added[spec.name]->excludes(added[spec.excludes]);
 }
-
-/// `softbake run`: the options it fills, and the --render/--no-render pair it resolves after
-/// parsing.
-struct RunCommandLine {
-  softbake::RunOptions options;
-  bool renderOn = false, renderOff = false;
-  bool noCache = false;
-};
 
 /// Of `words`, the one fewest single-character edits from `typed`, if it is within 2 (or a third of
 /// its length); empty otherwise.
@@ -133,112 +126,15 @@ std::string shellCommandLine(int argc, char** argv) {
   return line;
 }
 
-CLI::App* addRunCommand(CLI::App& app, RunCommandLine& line) {
-  softbake::RunOptions& run = line.options;
+CLI::App* addRunCommand(CLI::App& app, softbake::RunOptions& run) {
   CLI::App* runApp = app.add_subcommand(
       "run",
       "Simulate a scene and write its frames. INPUT is a scene .json, a mesh file (any "
       "format assimp reads, dropped on the ground as a soft body), or nothing for the "
       "built-in default scene.");
   runApp->add_option("input", run.input, "scene .json or mesh file (default: built-in scene)");
-  addLoadOptions(*runApp, run.load);
   runApp->add_option("-o,--out", run.out, "output folder")->capture_default_str();
-  runApp->add_option("--frames", run.frames, "number of frames to write")
-      ->check(CLI::Range(1, 10000000));
-  runApp->add_option("--fps", run.fps, "frames per second")->check(CLI::Range(0.001, 1e6));
-  runApp
-      ->add_option(
-          "--integrator", run.integrator,
-          "implicit (backward Euler, the default), explicit (the paper's Euler, to "
-          "reproduce its figures) or xpbd (position-based, small steps); implicit and xpbd "
-          "are stable at any step")
-      ->check(CLI::IsMember(softbake::integratorNames()));
-  runApp->add_option("--substeps", run.substeps, "substeps per frame, or 'auto'")
-      ->check(checkSubsteps);
-  runApp->add_option("--frame-padding", run.framePadding, "digits of the frame number in names")
-      ->check(CLI::Range(1, 9));
-  runApp
-      ->add_option("--broadphase", run.broadPhase,
-                   "collision broad phase: sbhash (the paper's subdivided boxes and box hash), "
-                   "spatialhash, bvh or brute")
-      ->check(CLI::IsMember(softbake::broadPhaseNames()));
-  runApp->add_option("--levels", run.levels, "subdivision level of the sbhash boxes")
-      ->check(CLI::Range(0, 8));
-  runApp
-      ->add_option("--response", run.response,
-                   "collision response: two-sided (momentum-conserving), paper (only the "
-                   "particle moves) or none")
-      ->check(CLI::IsMember(softbake::responseModeNames()));
-  runApp->add_flag("--no-pair-cache", run.noPairCache,
-                   "run the broad phase every substep instead of reusing its pairs (same result)");
-  runApp->add_flag("--no-response", run.noResponse,
-                   "detect contacts but do not respond (the paper's figure 5b)");
-  runApp->add_flag("--contacts", run.contacts,
-                   "write each frame's contacts to OUT/contacts/<scene>_0001.json ...");
-  CLI::Option* renderFlag = runApp->add_flag(
-      "--render", line.renderOn,
-      "render PNG frames with EGL off screen (on by default for the built-in scene)");
-  runApp->add_flag("--no-render", line.renderOff, "write no PNG frames")->excludes(renderFlag);
-  runApp->add_option("--size", run.size, "PNG size, WIDTHxHEIGHT (default 1280x720)");
-  runApp->add_flag("--no-contact-spheres", run.noContactSpheres,
-                   "render without the spheres at the contact points");
-  runApp
-      ->add_option("--contacts-view", run.contactsView,
-                   "xray: bodies translucent, so the contacts inside show (the default when "
-                   "contact spheres are drawn and bodies can touch each other or themselves); "
-                   "opaque: bodies solid")
-      ->check(CLI::IsMember(softbake::contactsViewNames()));
-  runApp->add_flag("--render-while-simulating", run.renderWhileSimulating,
-                   "render each frame as it is simulated, the camera framed on the first frame, "
-                   "instead of from the cache after the simulation, framed on the whole shot");
-  runApp->add_flag("--vdb", run.vdb, "write OpenVDB level sets, velocity and contacts per frame");
-  runApp->add_flag("--pc2", run.pc2,
-                   "write a PC2 point cache per body (OUT/pc2) and its rest mesh (OUT/cache_mesh): "
-                   "Blender's Mesh Cache and 3ds Max's Point Cache modifiers play them");
-  runApp->add_flag("--mdd", run.mdd, "write an MDD point cache per body (OUT/mdd), as --pc2");
-  runApp
-      ->add_option("--voxel-size", run.voxelSize,
-                   "VDB voxel size in scene units (default: half the mean edge length)")
-      ->check(positiveNumber);
-  runApp->add_flag("--vdb-fog", run.vdbFog, "also write a fog volume (density) per body");
-  runApp
-      ->add_option("--vdb-compression", run.vdbCompression,
-                   "VDB file compression: zip (default), blosc or none")
-      ->check(CLI::IsMember({"zip", "blosc", "none"}));
-  runApp->add_option("--up", run.upAxis, "up axis of the VDB export: y (Houdini) or z (Blender)")
-      ->check(CLI::IsMember({"y", "z"}));
-  runApp->add_option("-j,--threads", run.threads, "worker threads (0: all cores)")
-      ->check(CLI::Range(0, 4096));
-  runApp->add_flag("-q,--quiet", run.quiet, "print errors and the final summary only");
-  runApp
-      ->add_option("--max-output-gib", run.maxOutputGib,
-                   "refuse, before any work, a run whose frames would take more than this many "
-                   "GiB on disk (estimated)")
-      ->capture_default_str()
-      ->check(positiveNumber);
-  CLI::Option* noCache = runApp->add_flag(
-      "--no-cache", line.noCache,
-      "write no simulation cache (OUT/cache): the run cannot be resumed or exported from");
-  runApp
-      ->add_option("--checkpoint-every", run.checkpointEvery,
-                   "frames between the cache's checkpoints (default: as many as keep them within "
-                   "a tenth of the cache)")
-      ->check(CLI::Range(1, 10000000))
-      ->excludes(noCache);
-  runApp
-      ->add_flag("--cache-only", run.cacheOnly,
-                 "write the simulation cache alone; `export --all` writes the outputs later "
-                 "(how `farm` splits a bake)")
-      ->excludes(noCache);
-  runApp->add_flag("--resume", run.resume,
-                   "continue the killed, interrupted or failed run in OUT from its last "
-                   "checkpoint, writing only the missing files; the same command and files, or "
-                   "an error that says what changed");
-  runApp->add_option("--report", run.report,
-                     "write a bake report into this folder: DIR/index.html, every frame's "
-                     "substeps, contacts, energy, volumes and step time plotted, the frames that "
-                     "look wrong, a flipbook of the PNG frames; also when the run fails");
-
+  addTableOptions(*runApp, softbake::kOptionRun, run.given);
   return runApp;
 }
 
@@ -274,8 +170,8 @@ CLI::App* addExportCommand(CLI::App& app, softbake::ExportOptions& options) {
 /// mistake is reported before anything is written. Throws softbake::Error with CLI11's message.
 softbake::RunOptions parseRunArguments(const std::vector<std::string>& arguments) {
   CLI::App app;
-  RunCommandLine line;
-  addRunCommand(app, line);
+  softbake::RunOptions run;
+  addRunCommand(app, run);
   std::vector<std::string> words{"run", "wedge_scene.json"};
   words.insert(words.end(), arguments.begin(), arguments.end());
   std::reverse(words.begin(), words.end());  // CLI11 takes the arguments last first
@@ -284,9 +180,8 @@ softbake::RunOptions parseRunArguments(const std::vector<std::string>& arguments
   } catch (const CLI::ParseError& error) {
     throw softbake::Error(std::string("the run options after --: ") + error.what());
   }
-  if (line.renderOn) line.options.render = true;
-  if (line.renderOff) line.options.render = false;
-  return line.options;
+  softbake::landRunOptions(run);
+  return run;
 }
 
 CLI::App* addWedgeCommand(CLI::App& app, softbake::WedgeOptions& options) {
@@ -420,7 +315,7 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ".json, a mesh file or a built-in scene: default, balls1k, balls10k, balls100k, balls1m.");
   benchApp->add_option("scene", bench.input, "scene .json, mesh file or built-in scene name")
       ->required();
-  addLoadOptions(*benchApp, bench.load);
+  addTableOptions(*benchApp, softbake::kOptionBench, bench.given);
   CLI::Option* benchFrames =
       benchApp->add_option("--frames", bench.frames, "frames to simulate (overrides the scene)")
           ->check(CLI::Range(2, 10000000));
@@ -428,27 +323,15 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ->check(CLI::Range(1L, 1000000000L))
       ->excludes(benchFrames);
   benchApp
-      ->add_option("--integrator", bench.integrator,
-                   "explicit (the paper's Euler), implicit (backward Euler) or xpbd")
-      ->check(CLI::IsMember(softbake::integratorNames()));
-  benchApp->add_option("--substeps", bench.substeps, "substeps per frame, or 'auto'")
-      ->check(checkSubsteps);
-  benchApp
       ->add_option("--broadphase", bench.broadPhases,
                    "broad phases to run one after the other: sbhash, spatialhash, bvh, brute "
                    "(comma-separated; default: the scene's)")
       ->delimiter(',')
       ->check(CLI::IsMember(softbake::broadPhaseNames()));
-  benchApp->add_option("--levels", bench.levels, "subdivision level of the sbhash boxes")
-      ->check(CLI::Range(0, 8));
   benchApp
       ->add_option("--warmup", bench.warmupSteps,
                    "simulate this many steps first, unmeasured (to reach the contacts)")
       ->check(CLI::Range(0L, 1000000000L));
-  benchApp->add_flag("--no-pair-cache", bench.noPairCache,
-                     "run the broad phase every step, to compare the broad phases themselves");
-  benchApp->add_option("-j,--threads", bench.threads, "worker threads (0: all cores)")
-      ->check(CLI::Range(0, 4096));
   benchApp->add_option("--csv", bench.csv, "write one row per step and broad phase to this file");
   benchApp->add_flag("--with-exports", bench.withExports,
                      "also time the OBJ and VDB writers and the PNG renderer per frame");
@@ -496,7 +379,7 @@ int main(int argc, char** argv) {
       "`softbake run ... --resume`). `compare` has its own: 0 same, 1 different, 2 bad input.");
   app.require_subcommand(1);
 
-  RunCommandLine run;
+  softbake::RunOptions run;
   CLI::App* runApp = addRunCommand(app, run);
   softbake::CompareOptions compare;
   CLI::App* compareApp = addCompareCommand(app, compare);
@@ -532,11 +415,9 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : (compareApp->parsed() ? 2 : softbake::kExitBadInput);
   }
   if (runApp->parsed()) {
-    if (run.renderOn) run.options.render = true;
-    if (run.renderOff) run.options.render = false;
-    run.options.cache = !run.noCache;
-    run.options.commandLine = shellCommandLine(argc, argv);
-    return softbake::runCommand(run.options);
+    softbake::landRunOptions(run);
+    run.commandLine = shellCommandLine(argc, argv);
+    return softbake::runCommand(run);
   }
   if (exportApp->parsed()) return softbake::exportCommand(exportOptions);
   if (wedgeApp->parsed() || farmApp->parsed()) {
@@ -558,7 +439,11 @@ int main(int argc, char** argv) {
 #else
   if (compareApp->parsed()) return runCompareProgram(argv);
 #endif
-  if (benchApp->parsed()) return softbake::benchCommand(bench);
+  if (benchApp->parsed()) {
+    softbake::applyLoadOptions(bench.given, bench.load);
+    bench.threads = bench.given.value("threads", 0);
+    return softbake::benchCommand(bench);
+  }
   if (sceneApp->parsed()) return softbake::sceneCommand(scene);
   return 0;
 }

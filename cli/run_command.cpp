@@ -309,11 +309,11 @@ int run(const RunOptions& options) {
     threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
 
   SceneFile scene = loadSceneInput(options.input, options.load);
-  applyOverrides(options, scene);
+  applySceneOptions(options.given, scene);
   if (!options.quiet)
     for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
   printWarnings(scene);
-  const RenderOptions render = renderOptions(options, scene.render);
+  const RenderOptions render = renderOptions(scene.render);
   requireOutputWithin(scene, render.width, render.height, options.maxOutputGib * 0x1p30);
 
   BuildReport report;

@@ -16,17 +16,7 @@ namespace softbake {
 
 namespace fs = std::filesystem;
 
-void applyOverrides(const RunOptions& options, SceneFile& scene) {
-  applySimulationOverrides(options, scene.setup.settings);
-  if (options.framePadding) scene.output.framePadding = *options.framePadding;
-  if (options.contacts) scene.output.contacts = true;
-  if (options.render) scene.output.png = *options.render;
-  if (options.vdb) scene.output.vdb = true;
-  if (options.pc2) scene.output.pc2 = true;
-  if (options.mdd) scene.output.mdd = true;
-}
-
-RenderOptions renderOptions(const RunOptions& options, const RenderSettings& scene) {
+RenderOptions renderOptions(const RenderSettings& scene) {
   RenderOptions render;
   render.width = scene.width.value_or(render.width);
   render.height = scene.height.value_or(render.height);
@@ -34,26 +24,14 @@ RenderOptions renderOptions(const RunOptions& options, const RenderSettings& sce
   render.cameraPosition = scene.cameraPosition;
   render.cameraTarget = scene.cameraTarget;
   render.fovDegrees = scene.fovDegrees.value_or(render.fovDegrees);
-  render.contacts = scene.contactSpheres.value_or(render.contacts) && !options.noContactSpheres;
+  render.contacts = scene.contactSpheres.value_or(render.contacts);
   render.contactColor = scene.contactColor.value_or(render.contactColor);
   render.contactColorsByKind = scene.contactColorsByKind;
-  if (const std::optional<std::string>& view =
-          options.contactsView ? options.contactsView : scene.contactsView)
-    render.contactsView = parseContactsView(*view);
+  if (scene.contactsView) render.contactsView = parseContactsView(*scene.contactsView);
   render.contactRadius = scene.contactRadius.value_or(render.contactRadius);
   render.wireframe = scene.wireframe.value_or(render.wireframe);
   for (const std::optional<Vec3f>& color : scene.bodyColors)
     render.bodyColors.push_back(color.value_or(Vec3f(-1, -1, -1)));
-  if (options.size) {
-    int width = 0, height = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(options.size->c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 ||
-        (x != 'x' && x != 'X') || width < 16 || height < 16 || width > 16384 || height > 16384)
-      throw Error(cat("--size: expected WIDTHxHEIGHT between 16x16 and 16384x16384, got '",
-                      *options.size, "'"));
-    render.width = width;
-    render.height = height;
-  }
   return render;
 }
 

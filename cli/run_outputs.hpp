@@ -22,12 +22,9 @@
 
 namespace softbake {
 
-/// Writes the command line's simulation and output choices over the scene's.
-void applyOverrides(const RunOptions& options, SceneFile& scene);
-
-/// The scene's render settings, then the command line's. Throws softbake::Error for a --size it
-/// cannot read.
-RenderOptions renderOptions(const RunOptions& options, const RenderSettings& scene);
+/// The renderer's options: its defaults, with the scene's render settings (the options of the
+/// table written over them: applySceneOptions()) over them.
+RenderOptions renderOptions(const RenderSettings& scene);
 
 /// The VDB export's options, validated against `topology` before anything is written.
 VdbOptions vdbOptions(const RunOptions& options, const SceneTopology& topology);

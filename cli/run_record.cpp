@@ -11,61 +11,11 @@ namespace {
 using Json = nlohmann::ordered_json;
 namespace fs = std::filesystem;
 
-/// Calls `visit(flag, field)` for every option that shapes a run's files, named after its flag.
-/// One list for writing the record and reading it back, so the two cannot drift apart.
-template <class Options, class Visit>
-void eachRecordedOption(Options& options, Visit&& visit) {
-  visit("frames", options.frames);
-  visit("fps", options.fps);
-  visit("integrator", options.integrator);
-  visit("substeps", options.substeps);
-  visit("broadphase", options.broadPhase);
-  visit("levels", options.levels);
-  visit("response", options.response);
-  visit("no-response", options.noResponse);
-  visit("no-pair-cache", options.noPairCache);
-  visit("accept-lossy-import", options.load.acceptLossyImport);
-  visit("max-vertices", options.load.maxVertices);
-  visit("max-faces", options.load.maxFaces);
-  visit("max-import-memory", options.load.maxImportMemoryMib);
-  visit("max-import-seconds", options.load.maxImportSeconds);
-  visit("max-bodies", options.load.maxBodies);
-  visit("frame-padding", options.framePadding);
-  visit("contacts", options.contacts);
-  visit("render", options.render);
-  visit("size", options.size);
-  visit("no-contact-spheres", options.noContactSpheres);
-  visit("contacts-view", options.contactsView);
-  visit("render-while-simulating", options.renderWhileSimulating);
-  visit("cache-only", options.cacheOnly);
-  visit("vdb", options.vdb);
-  visit("pc2", options.pc2);
-  visit("mdd", options.mdd);
-  visit("voxel-size", options.voxelSize);
-  visit("vdb-fog", options.vdbFog);
-  visit("up", options.upAxis);
-  visit("vdb-compression", options.vdbCompression);
-}
-
-template <class T>
-Json toJson(const std::optional<T>& value) {
-  return value ? Json(*value) : Json(nullptr);
-}
-template <class T>
-Json toJson(const T& value) {
-  return Json(value);
-}
-
-template <class T>
-void fromJson(const Json& json, std::optional<T>& value) {
-  if (json.is_null())
-    value.reset();
-  else
-    value = json.get<T>();
-}
-template <class T>
-void fromJson(const Json& json, T& value) {
-  value = json.get<T>();
+/// What `given` records for `spec`: its value, false for a flag not given, null for any other.
+Json recorded(const GivenOptions& given, const OptionSpec& spec) {
+  const auto found = given.find(std::string(spec.name));
+  if (found != given.end()) return *found;
+  return spec.kind == OptionKind::Flag ? Json(false) : Json(nullptr);
 }
 
 std::string shown(const Json& value) {
@@ -74,23 +24,22 @@ std::string shown(const Json& value) {
 
 }  // namespace
 
-Json runRecord(const RunOptions& options, const SceneFile& scene, int checkpointEvery) {
+Json runRecord(const RunOptions& run, const SceneFile& scene, int checkpointEvery) {
   // A file input is recorded by its absolute path, so `export` and `--resume` find it from any
   // folder; a built-in scene by its name.
   std::error_code error;
-  const bool fileInput = !options.input.empty() && fs::is_regular_file(options.input, error);
+  const bool fileInput = !run.input.empty() && fs::is_regular_file(run.input, error);
   Json files = Json::array();
   for (const fs::path& file : scene.inputFiles)
     files.push_back(
         {{"path", fs::absolute(file).lexically_normal().string()}, {"sha256", sha256OfFile(file)}});
-  Json recorded = Json::object();
-  eachRecordedOption(options,
-                     [&](const char* flag, const auto& field) { recorded[flag] = toJson(field); });
-  recorded["checkpoint-every"] = checkpointEvery;
-  return {{"input",
-           fileInput ? fs::absolute(options.input).lexically_normal().string() : options.input},
+  Json options = Json::object();
+  for (const OptionSpec& spec : optionTable())
+    if (spec.recorded) options[std::string(spec.name)] = recorded(run.given, spec);
+  options["checkpoint-every"] = checkpointEvery;
+  return {{"input", fileInput ? fs::absolute(run.input).lexically_normal().string() : run.input},
           {"files", std::move(files)},
-          {"options", std::move(recorded)}};
+          {"options", std::move(options)}};
 }
 
 std::vector<std::string> runRecordDifferences(const Json& before, const Json& now) {
@@ -146,13 +95,23 @@ RunOptions runOptionsFromRecord(const Json& record, const fs::path& outputDirect
   try {
     options.input = record.at("input").get<std::string>();
     const Json& recorded = record.at("options");
-    eachRecordedOption(options, [&](const char* flag, auto& field) {
-      if (recorded.contains(flag)) fromJson(recorded[flag], field);
-    });
+    for (const OptionSpec& spec : optionTable()) {
+      if (!spec.recorded || !recorded.contains(std::string(spec.name))) continue;
+      Json value = recorded[std::string(spec.name)];
+      if (value.is_null() || value == false) continue;  // not given
+      // A record of an older softbake wrote some values as their command line's text ("4").
+      if (value.is_string()) value = optionValueFromText(spec, value.get<std::string>());
+      giveOption(options.given, spec, value);
+    }
     const int every = recorded.value("checkpoint-every", 0);
-    options.cache = every > 0;
-    if (every > 0) options.checkpointEvery = every;
+    if (every > 0)
+      giveOption(options.given, optionSpec("checkpoint-every"), every);
+    else
+      giveOption(options.given, optionSpec("no-cache"), true);
+    landRunOptions(options);
   } catch (const nlohmann::json::exception& error) {
+    throw Error(cat(source, ": run: ", error.what()));
+  } catch (const Error& error) {
     throw Error(cat(source, ": run: ", error.what()));
   }
   return options;

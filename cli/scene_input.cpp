@@ -47,24 +47,4 @@ void printWarnings(const SceneFile& scene) {
     std::fprintf(stderr, "warning: %s\n", warning.c_str());
 }
 
-void applySimulationOverrides(const SimulationOverrides& overrides, SimulationSettings& settings) {
-  if (overrides.frames) settings.frames = *overrides.frames;
-  if (overrides.fps) settings.fps = *overrides.fps;
-  if (overrides.substeps)
-    settings.substeps = *overrides.substeps == "auto" ? 0 : std::stoi(*overrides.substeps);
-  if (overrides.integrator && !parseIntegrator(*overrides.integrator, settings.integrator))
-    throw Error(cat("--integrator: expected ", alternatives(integratorNames()), ", got '",
-                    *overrides.integrator, "'"));
-  CollisionSettings& collisions = settings.collisions;
-  if (overrides.broadPhase && !parseBroadPhase(*overrides.broadPhase, collisions.broadPhase))
-    throw Error(cat("--broadphase: expected ", alternatives(broadPhaseNames()), ", got '",
-                    *overrides.broadPhase, "'"));
-  if (overrides.response && !parseResponseMode(*overrides.response, collisions.response))
-    throw Error(cat("--response: expected ", alternatives(responseModeNames()), ", got '",
-                    *overrides.response, "'"));
-  if (overrides.noResponse) collisions.response = ResponseMode::None;
-  if (overrides.levels) collisions.subdivisionLevels = *overrides.levels;
-  if (overrides.noPairCache) collisions.pairCache = false;
-}
-
 }  // namespace softbake

@@ -15,6 +15,7 @@
 #include "importers/json_reader.hpp"
 #include "importers/mesh_import.hpp"
 #include "importers/mesh_transform.hpp"
+#include "importers/option_table.hpp"
 
 namespace softbake {
 
@@ -28,16 +29,6 @@ std::string validPresetNames() {
   for (const NamedMaterial& preset : materialPresets())
     names += cat(names.empty() ? "" : ", ", preset.name);
   return names;
-}
-
-constexpr double kMaxInt = std::numeric_limits<int>::max();
-
-// A count that is at least 1 and fits an int.
-int smallInteger(const JsonValue& value) {
-  const long long x = value.integerAtLeast(1);
-  if (x > std::numeric_limits<int>::max())
-    value.fail(cat("expected an integer <= ", std::numeric_limits<int>::max()));
-  return int(x);
 }
 
 Vec3 toVec3(const Eigen::Vector3d& v) {
@@ -58,11 +49,37 @@ std::string sceneName(const JsonValue& value) {
   return text;
 }
 
+// Checks the keys of the object at `value` that options of the table override, as the options
+// check them; the parser then reads them as they are.
+void checkOptionKeys(const JsonValue& value) {
+  for (const OptionSpec& spec : optionTable()) {
+    const std::size_t dot = spec.sceneKey.rfind('.');
+    if (dot == std::string_view::npos || spec.sceneKey.substr(0, dot) != value.path()) continue;
+    const std::string key(spec.sceneKey.substr(dot + 1));
+    if (!value.raw().is_object() || !value.raw().contains(key)) continue;
+    // A flag standing for one value of a key (--no-response: response "none") leaves the key's
+    // check to the option that takes any of its values.
+    if (spec.kind == OptionKind::Flag && !spec.value.is_boolean()) continue;
+    const JsonValue child = value.child(key);
+    if (auto error = checkOptionValue(spec, child.raw(), '"')) child.fail(error->message);
+  }
+}
+
 class SceneParser {
  public:
   SceneParser(std::string_view source, const std::filesystem::path& baseDirectory,
               const SceneLoadOptions& options)
       : source_(source), baseDirectory_(baseDirectory), options_(options) {}
+
+  /// Writes `json`'s settings, output and render keys over `scene`.
+  SceneFile apply(const nlohmann::json& json, SceneFile scene) {
+    scene_ = std::move(scene);
+    const JsonObject root = JsonValue(json, source_, "").object({"settings", "output", "render"});
+    if (auto settings = root.find("settings")) parseSettings(*settings);
+    if (auto output = root.find("output")) parseOutput(*output);
+    if (auto render = root.find("render")) parseRender(*render);
+    return std::move(scene_);
+  }
 
   SceneFile parse(const nlohmann::json& json) {
     const JsonObject root =
@@ -102,21 +119,14 @@ class SceneParser {
   void parseSettings(const JsonValue& value) {
     const JsonObject object = value.object({"fps", "frames", "integrator", "substeps", "gravity",
                                             "units", "max_speed", "skin", "collisions", "import"});
+    checkOptionKeys(value);
     SimulationSettings& settings = scene_.setup.settings;
-    if (auto fps = object.find("fps")) settings.fps = fps->numberAbove(0);
-    if (auto frames = object.find("frames")) settings.frames = smallInteger(*frames);
-    if (auto integrator = object.find("integrator")) {
-      if (!parseIntegrator(integrator->string(), settings.integrator))
-        integrator->fail(cat("expected ", alternatives(integratorNames(), "\"")));
-    }
-    if (auto substeps = object.find("substeps")) {
-      const nlohmann::json& raw = substeps->raw();
-      const bool isAuto = raw.is_string() && raw.get<std::string>() == "auto";
-      const double count = raw.is_number() ? raw.get<double>() : 0;
-      if (!isAuto && !(count >= 1 && count == std::floor(count) && count <= kMaxInt))
-        substeps->fail("expected \"auto\" or an integer >= 1");
-      settings.substeps = isAuto ? 0 : int(count);
-    }
+    if (auto fps = object.find("fps")) settings.fps = fps->raw().get<double>();
+    if (auto frames = object.find("frames")) settings.frames = frames->raw().get<int>();
+    if (auto integrator = object.find("integrator"))
+      parseIntegrator(integrator->string(), settings.integrator);
+    if (auto substeps = object.find("substeps"))
+      settings.substeps = substeps->raw().is_string() ? 0 : substeps->raw().get<int>();
     if (auto gravity = object.find("gravity")) settings.gravity = toVec3(gravity->vector3());
     if (auto units = object.find("units")) settings.units = nonEmptyString(*units);
     if (auto maxSpeed = object.find("max_speed"))
@@ -152,22 +162,20 @@ class SceneParser {
     const JsonObject object =
         value.object({"broadphase", "levels", "response", "restitution", "friction", "pair_cache",
                       "initial_overlap", "failsafe", "contacts_in_step", "self_collision"});
+    checkOptionKeys(value);
     CollisionSettings& collisions = scene_.setup.settings.collisions;
-    if (auto broadPhase = object.find("broadphase")) {
-      if (!parseBroadPhase(broadPhase->string(), collisions.broadPhase))
-        broadPhase->fail(cat("expected ", alternatives(broadPhaseNames(), "\"")));
-    }
+    if (auto broadPhase = object.find("broadphase"))
+      parseBroadPhase(broadPhase->string(), collisions.broadPhase);
     if (auto levels = object.find("levels"))
-      collisions.subdivisionLevels = int(levels->integerIn(0, 8));
-    if (auto response = object.find("response")) {
-      if (!parseResponseMode(response->string(), collisions.response))
-        response->fail(cat("expected ", alternatives(responseModeNames(), "\"")));
-    }
+      collisions.subdivisionLevels = levels->raw().get<int>();
+    if (auto response = object.find("response"))
+      parseResponseMode(response->string(), collisions.response);
     if (auto restitution = object.find("restitution"))
       collisions.restitution = Scalar(restitution->numberIn(0, 1));
     if (auto friction = object.find("friction"))
       collisions.friction = Scalar(friction->numberAtLeast(0));
-    if (auto pairCache = object.find("pair_cache")) collisions.pairCache = pairCache->boolean();
+    if (auto pairCache = object.find("pair_cache"))
+      collisions.pairCache = pairCache->raw().get<bool>();
     if (auto failsafe = object.find("failsafe")) collisions.failsafe = failsafe->boolean();
     if (auto inStep = object.find("contacts_in_step"))
       collisions.contactsInStep = inStep->boolean();
@@ -470,12 +478,11 @@ class SceneParser {
     const JsonObject object =
         value.object({"size", "samples", "camera", "contact_spheres", "contact_color",
                       "contact_radius", "contacts_view", "wireframe"});
+    checkOptionKeys(value);
     RenderSettings& render = scene_.render;
     if (auto size = object.find("size")) {
-      const std::vector<JsonValue> sides = size->array();
-      if (sides.size() != 2) size->fail("expected [width, height]");
-      render.width = int(sides[0].integerIn(16, 16384));
-      render.height = int(sides[1].integerIn(16, 16384));
+      render.width = size->raw()[0].get<int>();
+      render.height = size->raw()[1].get<int>();
     }
     if (auto samples = object.find("samples")) render.samples = int(samples->integerIn(1, 16));
     if (auto camera = object.find("camera")) {
@@ -491,7 +498,8 @@ class SceneParser {
       if (render.cameraPosition && *render.cameraPosition == *render.cameraTarget)
         c.at("target").fail("the camera's target is its position: it would look nowhere");
     }
-    if (auto spheres = object.find("contact_spheres")) render.contactSpheres = spheres->boolean();
+    if (auto spheres = object.find("contact_spheres"))
+      render.contactSpheres = spheres->raw().get<bool>();
     if (auto color = object.find("contact_color")) {
       if (color->isString() && color->string() == "kind")
         render.contactColorsByKind = true;
@@ -502,25 +510,23 @@ class SceneParser {
     }
     if (auto radius = object.find("contact_radius"))
       render.contactRadius = float(radius->numberAbove(0));
-    if (auto view = object.find("contacts_view")) {
-      const std::string name = view->isString() ? view->string() : std::string();
-      if (name != "xray" && name != "opaque") view->fail("expected \"xray\" or \"opaque\"");
-      render.contactsView = name;
-    }
+    if (auto view = object.find("contacts_view")) render.contactsView = view->string();
     if (auto wireframe = object.find("wireframe")) render.wireframe = wireframe->boolean();
   }
 
   void parseOutput(const JsonValue& value) {
     const JsonObject object =
         value.object({"frame_padding", "obj", "contacts", "png", "vdb", "pc2", "mdd"});
+    checkOptionKeys(value);
     if (auto padding = object.find("frame_padding"))
-      scene_.output.framePadding = int(padding->integerIn(1, 9));
+      scene_.output.framePadding = padding->raw().get<int>();
     if (auto obj = object.find("obj")) scene_.output.obj = obj->boolean();
-    if (auto contacts = object.find("contacts")) scene_.output.contacts = contacts->boolean();
-    if (auto png = object.find("png")) scene_.output.png = png->boolean();
-    if (auto vdb = object.find("vdb")) scene_.output.vdb = vdb->boolean();
-    if (auto pc2 = object.find("pc2")) scene_.output.pc2 = pc2->boolean();
-    if (auto mdd = object.find("mdd")) scene_.output.mdd = mdd->boolean();
+    if (auto contacts = object.find("contacts"))
+      scene_.output.contacts = contacts->raw().get<bool>();
+    if (auto png = object.find("png")) scene_.output.png = png->raw().get<bool>();
+    if (auto vdb = object.find("vdb")) scene_.output.vdb = vdb->raw().get<bool>();
+    if (auto pc2 = object.find("pc2")) scene_.output.pc2 = pc2->raw().get<bool>();
+    if (auto mdd = object.find("mdd")) scene_.output.mdd = mdd->raw().get<bool>();
   }
 
   std::string_view source_;
@@ -544,6 +550,10 @@ ImportLimits SceneLoadOptions::importLimits(ImportLimits scene) const {
 SceneFile parseScene(const nlohmann::json& json, std::string_view source,
                      const std::filesystem::path& baseDirectory, const SceneLoadOptions& options) {
   return SceneParser(source, baseDirectory, options).parse(json);
+}
+
+void applySceneKeys(SceneFile& scene, const nlohmann::json& document, std::string_view source) {
+  scene = SceneParser(source, {}, {}).apply(document, std::move(scene));
 }
 
 SceneFile parseSceneText(std::string_view text, std::string_view source,

@@ -87,6 +87,11 @@ SceneFile parseSceneText(std::string_view text, std::string_view source,
                          const std::filesystem::path& baseDirectory,
                          const SceneLoadOptions& options = {});
 
+/// Writes a partial scene document's settings, output and render keys over `scene`, read and
+/// checked as a scene file's are; `source` names it in messages. The option table's values land
+/// in the scene through it (importers/option_table.hpp).
+void applySceneKeys(SceneFile& scene, const nlohmann::json& document, std::string_view source);
+
 /// The JSON text of the built-in default scene: two soft balls thrown at each other over a ground
 /// plane, 240 frames at 24 fps. examples/default.json is a copy, checked by a test.
 std::string_view defaultSceneJson();

@@ -103,6 +103,13 @@ nlohmann::json toJson(py::handle value, const std::string& path) {
                            " is not JSON (expected dict, list, str, int, float, bool or None)"));
 }
 
+/// "a, b, c": the names in a docstring.
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text;
+}
+
 /// A path given as str, bytes or os.PathLike, as the file system's text.
 std::string pathText(py::handle path) {
   return py::module_::import("os").attr("fsdecode")(path).cast<std::string>();
@@ -127,7 +134,7 @@ class Simulation {
     SceneFile file =
         json ? parseScene(*json, kDictSource, std::filesystem::current_path(), options.load)
              : loadSceneInput(scene.value_or(""), options.load);
-    applySimulationOverrides(options, file.setup.settings);
+    applySceneOptions(options.given, file);
     name_ = file.setup.name;
     notes_ = std::move(file.notes);
     warnings_ = std::move(file.warnings);
@@ -351,7 +358,9 @@ PYBIND11_MODULE(softbake, m) {
   m.def("builtin_scenes", &benchSceneNames,
         "The built-in scene names Simulation() and run() take: default, balls1k, balls10k, ...");
 
-  py::class_<Simulation>(m, "Simulation", R"doc(
+  // The keywords are the option table's (importers/option_table.hpp), listed from it; pybind11
+  // keeps the docstrings' pointers, so the texts live as long as the module.
+  static const std::string simulationDoc = cat(R"doc(
 A scene simulated frame by frame, as `softbake run` simulates it.
 
 Simulation(scene=None, **options)
@@ -359,13 +368,13 @@ Simulation(scene=None, **options)
     body), a built-in scene name (softbake.builtin_scenes()), a dict holding a scene's JSON (mesh
     paths relative to the current directory), or None for the built-in default scene.
   options: the simulation settings `softbake run` takes as flags, named as the flag without its
-    dashes: frames, fps, integrator, substeps, broadphase, levels, response, no_response,
-    no_pair_cache, accept_lossy_import, max_vertices, max_faces, max_import_memory,
-    max_import_seconds, max_bodies;
+    dashes and with '_' for '-': )doc",
+                                               joined(keywordNames(KeywordSet::Simulation)), R"doc(.
     threads limits the worker threads (0: all cores). The results do not depend on it.
 
 The simulation starts at frame 1, the initial state; advance() simulates the next frames.
-)doc")
+)doc");
+  py::class_<Simulation>(m, "Simulation", simulationDoc.c_str())
       .def(py::init([](py::object scene, py::kwargs keywords) {
              RunOptions options;
              applyKeywords(keywords, KeywordSet::Simulation, "Simulation()", options);
@@ -426,25 +435,23 @@ None) and particle (the crossing particle's index in its body, or None).
                    s.topology().settings.frames, ", ", s.bodies().size(), " bodies>");
       });
 
-  m.def("run", &run, py::arg("scene") = py::none(), py::arg("out") = "out", R"doc(
+  static const std::string runDoc = cat(R"doc(
 Does what `softbake run SCENE --out OUT ...` does, in this process: simulates the scene and writes
 its outputs (OBJ, PNG, VDB, contacts, the simulation cache and the manifest) as the command does,
 printing what it prints, without holding the GIL.
 
 scene: a scene .json, a mesh file or a built-in scene name; None for the built-in default scene.
 out: the output folder.
-options: the flags of `softbake run`, named without their dashes and with '_' for '-':
-  frames, fps, integrator, substeps ('auto' or a count), broadphase, levels, response,
-  no_response, no_pair_cache, frame_padding, contacts, render (True: --render, False:
-  --no-render, None: the scene's choice), size ('1280x720' or (1280, 720)), no_contact_spheres,
-  contacts_view ('xray' or 'opaque'), render_while_simulating, vdb, voxel_size, vdb_fog,
-  vdb_compression, up, pc2, mdd, threads, quiet, max_output_gib, no_cache, checkpoint_every, cache_only, resume,
-  report (a folder: the bake report), accept_lossy_import, max_vertices, max_faces,
-  max_import_memory, max_import_seconds, max_bodies.
+options: the flags of `softbake run`, named without their dashes and with '_' for '-': )doc",
+                                        joined(keywordNames(KeywordSet::Run)), R"doc(.
+  render is True (--render), False (--no-render) or None (the scene's choice); substeps 'auto' or
+  a count; size '1280x720' or (1280, 720); report a folder (the bake report). None leaves any
+  option to the scene.
 
 Returns the command's exit code: 0, or 130/143 when SIGINT/SIGTERM stopped it after a frame (the
 run can be continued with resume=True). Raises softbake.Error with the command's message when it
 fails, its exit_code the command's status; TypeError/ValueError for options the command line
 would refuse.
 )doc");
+  m.def("run", &run, py::arg("scene") = py::none(), py::arg("out") = "out", runDoc.c_str());
 }

@@ -69,29 +69,6 @@ std::vector<Vec3f> meshNormals(const TriangleMesh& mesh) {
 
 // ---- scene ---------------------------------------------------------------------------------
 
-std::string_view contactsViewName(ContactsView view) {
-  switch (view) {
-    case ContactsView::XRay:
-      return "xray";
-    case ContactsView::Opaque:
-      return "opaque";
-    case ContactsView::Automatic:
-      break;
-  }
-  return "automatic";
-}
-
-std::vector<std::string> contactsViewNames() {
-  return {std::string(contactsViewName(ContactsView::XRay)),
-          std::string(contactsViewName(ContactsView::Opaque))};
-}
-
-ContactsView parseContactsView(std::string_view name) {
-  for (const ContactsView view : {ContactsView::XRay, ContactsView::Opaque})
-    if (name == contactsViewName(view)) return view;
-  return ContactsView::Automatic;
-}
-
 ContactsView contactsViewFor(const RenderOptions& options, const SceneTopology& topology) {
   if (options.contactsView != ContactsView::Automatic) return options.contactsView;
   if (!options.contacts) return ContactsView::Opaque;

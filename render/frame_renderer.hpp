@@ -27,21 +27,6 @@
 
 namespace softbake {
 
-/// How the bodies are drawn around the contact spheres.
-enum class ContactsView : std::uint8_t {
-  Automatic,  ///< XRay when contact spheres are drawn and the scene has contacts between
-              ///< surfaces (see contactsViewFor()), else Opaque
-  XRay,       ///< bodies translucent (order-independent transparency), contacts opaque
-  Opaque,     ///< bodies opaque: contacts between them are mostly hidden inside
-};
-
-/// "xray", "opaque" (and "automatic"): the names of the scene key and the command-line option.
-std::string_view contactsViewName(ContactsView view);
-/// The names a scene or an option can choose: "xray", "opaque" (Automatic is the default only).
-std::vector<std::string> contactsViewNames();
-/// The view of a name in contactsViewNames(); Automatic for any other.
-ContactsView parseContactsView(std::string_view name);
-
 /// The default contact colour, linear RGB: a saturated red, which no body of the soft palette
 /// (saturation 0.55) and not the grey ground (0.5) comes near. A function, since an Eigen
 /// constant would be initialised at run time, in no set order with other files' globals.

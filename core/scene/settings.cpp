@@ -89,4 +89,27 @@ bool parseIntegrator(std::string_view name, IntegratorKind& kind) {
   return parseNamed(name, std::span<const IntegratorKind>(kIntegratorKinds), integratorName, kind);
 }
 
+std::string_view contactsViewName(ContactsView view) {
+  switch (view) {
+    case ContactsView::XRay:
+      return "xray";
+    case ContactsView::Opaque:
+      return "opaque";
+    case ContactsView::Automatic:
+      break;
+  }
+  return "automatic";
+}
+
+std::vector<std::string> contactsViewNames() {
+  return {std::string(contactsViewName(ContactsView::XRay)),
+          std::string(contactsViewName(ContactsView::Opaque))};
+}
+
+ContactsView parseContactsView(std::string_view name) {
+  for (const ContactsView view : {ContactsView::XRay, ContactsView::Opaque})
+    if (name == contactsViewName(view)) return view;
+  return ContactsView::Automatic;
+}
+
 }  // namespace softbake

@@ -3,6 +3,7 @@
 /// one name per kind, so the scene parser, the command line, Python and the messages stay in
 /// step. Plain data, seen by every layer of core and by the importers.
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -82,6 +83,22 @@ std::string_view integratorName(IntegratorKind kind);
 std::vector<std::string> integratorNames();
 /// The kind a name gives, or false for an unknown name.
 bool parseIntegrator(std::string_view name, IntegratorKind& kind);
+
+/// How the renderer draws the bodies around the contact spheres (render/frame_renderer.hpp), a
+/// setting of the scene's render section named here beside the others, so importers check it.
+enum class ContactsView : std::uint8_t {
+  Automatic,  ///< XRay when contact spheres are drawn and the scene has contacts between
+              ///< surfaces (see contactsViewFor()), else Opaque
+  XRay,       ///< bodies translucent (order-independent transparency), contacts opaque
+  Opaque,     ///< bodies opaque: contacts between them are mostly hidden inside
+};
+
+/// "xray", "opaque" (and "automatic"): the names of the scene key and the command-line option.
+std::string_view contactsViewName(ContactsView view);
+/// The names a scene or an option can choose: "xray", "opaque" (Automatic is the default only).
+std::vector<std::string> contactsViewNames();
+/// The view of a name in contactsViewNames(); Automatic for any other.
+ContactsView parseContactsView(std::string_view name);
 
 struct CollisionSettings {
   /// The fastest correct broad phase, measured (bench/results/README.md): the AABB tree. The

@@ -207,7 +207,7 @@ def test_run_options(tmp_path):
         softbake.run("default", out=tmp_path / "b", up="x")
     with pytest.raises(ValueError, match="checkpoint_every excludes no_cache"):
         softbake.run("default", out=tmp_path / "b", no_cache=True, checkpoint_every=4)
-    with pytest.raises(TypeError, match="render: expected True or False"):
+    with pytest.raises(TypeError, match="render: expected true or false"):
         softbake.run("default", out=tmp_path / "b", render="yes")
     assert not (tmp_path / "b").exists()  # refused before anything was written
 

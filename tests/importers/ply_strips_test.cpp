@@ -119,7 +119,7 @@ bool isClosedAndConsistentlyWound(const std::vector<Triangle>& triangles) {
   return true;
 }
 
-double signedVolume(const TriangleMesh& mesh) {
+double meshSignedVolume(const TriangleMesh& mesh) {
   double volume = 0;
   for (const Triangle& t : mesh.triangles) {
     const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
@@ -164,8 +164,8 @@ TEST_P(PlyStripFile, LoadsEveryTriangleAsAClosedOutwardSurface) {
   EXPECT_EQ(mesh.positions.size(), sphere.positions.size());
   EXPECT_TRUE(isClosedAndConsistentlyWound(mesh.triangles));
   // Outward: positive, and near the unit sphere's 4.19 (the polyhedron is a little smaller).
-  EXPECT_GT(signedVolume(mesh), 3.5);
-  EXPECT_LT(signedVolume(mesh), 4.19);
+  EXPECT_GT(meshSignedVolume(mesh), 3.5);
+  EXPECT_LT(meshSignedVolume(mesh), 4.19);
   EXPECT_THAT(imported.notes,
               ElementsAre(file.string() + ": read 168 triangles from its "
                                           "triangle strips (assimp 5.2 reads one)"));
