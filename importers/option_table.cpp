@@ -161,6 +161,15 @@ std::vector<OptionSpec> makeTable() {
        .value = false,
        .recorded = true},
 
+      {.name = "no-self-collision",
+       .kind = K::Flag,
+       .help = "bodies whose scene entry does not ask for it collide with others but not with "
+               "themselves: 1.1-1.5x faster for bodies that cannot fold (balls, blocks)",
+       .commands = kSimulate,
+       .sceneKey = "settings.collisions.self_collision",
+       .value = false,
+       .recorded = true},
+
       // The outputs.
       {.name = "frame-padding",
        .kind = K::Whole,

@@ -1,7 +1,7 @@
 // `softbake run` flags, each checked by what it changes in the files or the output, not only by
 // the exit status: --fps, --frame-padding, --levels, --response, --vdb-fog, --vdb-compression,
-// --no-contact-spheres, --contacts-view (with export's), and the progress lines of a run that is
-// not --quiet.
+// --no-contact-spheres, --contacts-view (with export's), --no-self-collision, and the progress
+// lines of a run that is not --quiet.
 #include <gtest/gtest.h>
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -99,6 +100,59 @@ TEST_F(RunFlags, FramePaddingSetsTheDigitsOfEveryFileName) {
   EXPECT_TRUE(fs::exists(out / "cache/default_000002.sbframe"));
   const Result bad = runSoftbake("run --frame-padding 10 -o " + quoted(folder_ / "bad"));
   EXPECT_EQ(bad.exitCode, 1) << bad.output;
+}
+
+// flag_fold's flag without its own self_collision key, so the scene's setting decides: the flag
+// folds onto itself from frame 18.
+fs::path flagScene(const fs::path& folder, const std::string& collisions) {
+  nlohmann::json scene = readJson(example("flag_fold"));
+  scene["bodies"][0]["mesh"] = (fs::path(SOFTBAKE_SOURCE_DIR) / "examples/sheet_24.obj").string();
+  scene["bodies"][0].erase("self_collision");
+  scene["settings"]["frames"] = 24;
+  if (!collisions.empty()) scene["settings"]["collisions"] = nlohmann::json::parse(collisions);
+  const fs::path path = folder / ("flag" + std::to_string(collisions.size()) + ".json");
+  std::ofstream(path) << scene.dump();
+  return path;
+}
+
+// Contacts of a body with itself, over every frame's contacts file.
+int selfContacts(const fs::path& out) {
+  int count = 0;
+  for (int frame = 1; frame <= 24; ++frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "contacts/flag_fold_%04d.json", frame);
+    const nlohmann::json contacts = readJson(out / name);
+    for (const nlohmann::json& contact : contacts.at("contacts"))
+      count += contact.at("bodies")[0] == contact.at("bodies")[1];
+  }
+  return count;
+}
+
+TEST_F(RunFlags, NoSelfCollisionLetsAFoldingFlagPassItselfAsTheSceneKeyDoes) {
+  const auto bake = [&](const fs::path& scene, const std::string& flags, const char* name) {
+    const fs::path out = folder_ / name;
+    const Result run = runSoftbake("run " + quoted(scene) + " --contacts --no-render --no-cache " +
+                                   flags + " -q -o " + quoted(out));
+    EXPECT_EQ(run.exitCode, 0) << run.output;
+    return out;
+  };
+  const fs::path plain = flagScene(folder_, "");
+  const fs::path byDefault = bake(plain, "", "default");
+  const fs::path byFlag = bake(plain, "--no-self-collision", "flag");
+  const fs::path byKey = bake(flagScene(folder_, R"({"self_collision": false})"), "", "key");
+  EXPECT_GT(selfContacts(byDefault), 20);
+  EXPECT_EQ(selfContacts(byFlag), 0);
+  // The flag lands where the scene key lands: the same bytes.
+  EXPECT_EQ(readFile(byFlag / "obj/flag_fold_0024.obj"),
+            readFile(byKey / "obj/flag_fold_0024.obj"));
+  EXPECT_NE(readFile(byFlag / "obj/flag_fold_0024.obj"),
+            readFile(byDefault / "obj/flag_fold_0024.obj"));
+  EXPECT_TRUE(
+      readJson(byFlag / "manifest.json")["run"]["options"]["no-self-collision"].get<bool>());
+  // bench takes it too: no pairs of the flag with itself to look at.
+  const Result bench = runSoftbake("bench " + quoted(plain) + " --frames 20 --no-self-collision");
+  ASSERT_EQ(bench.exitCode, 0) << bench.output;
+  EXPECT_NE(bench.output.find(" contacts_per_step=0.0 "), std::string::npos) << bench.output;
 }
 
 TEST_F(RunFlags, LevelsReachTheSbhashBroadPhaseAndChangeNoResult) {
