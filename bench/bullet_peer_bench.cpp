@@ -39,7 +39,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene_input.hpp"
+#include "bake/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/mesh/mesh_topology.hpp"
 #include "core/simulator.hpp"

@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cctype>
 
+#include "bake/run_outputs.hpp"
+#include "bake/run_record.hpp"
+#include "bake/scene_input.hpp"
 #include "cli/obj_frame.hpp"
-#include "cli/run_outputs.hpp"
-#include "cli/run_record.hpp"
-#include "cli/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/text.hpp"

@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <memory>
 
-#include "cli/command_errors.hpp"
-#include "cli/run_outputs.hpp"
-#include "cli/scene_input.hpp"
+#include "bake/command_errors.hpp"
+#include "bake/run_outputs.hpp"
+#include "bake/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"

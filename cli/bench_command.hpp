@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/scene_input.hpp"
+#include "bake/scene_input.hpp"
 #include "importers/option_table.hpp"
 
 namespace softbake {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/svg_plot.hpp"
+#include "bake/svg_plot.hpp"
 
 namespace softbake {
 

@@ -6,11 +6,11 @@
 #include <cstdio>
 #include <optional>
 
-#include "cli/command_errors.hpp"
-#include "cli/progress_display.hpp"
-#include "cli/run_outputs.hpp"
-#include "cli/run_record.hpp"
-#include "cli/scene_input.hpp"
+#include "bake/command_errors.hpp"
+#include "bake/progress_display.hpp"
+#include "bake/run_outputs.hpp"
+#include "bake/run_record.hpp"
+#include "bake/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/text.hpp"

@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "cli/command_errors.hpp"
-#include "cli/run_outputs.hpp"
-#include "cli/scene_input.hpp"
-#include "cli/shell_quote.hpp"
+#include "bake/command_errors.hpp"
+#include "bake/run_outputs.hpp"
+#include "bake/scene_input.hpp"
+#include "bake/shell_quote.hpp"
 #include "cli/wedge.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"

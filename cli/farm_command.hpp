@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/run_command.hpp"
+#include "bake/run_bake.hpp"
 
 namespace softbake {
 

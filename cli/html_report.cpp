@@ -1,8 +1,8 @@
 #include "cli/html_report.hpp"
 
-#include "cli/markup.hpp"
-#include "cli/report_page.hpp"
-#include "cli/svg_plot.hpp"
+#include "bake/markup.hpp"
+#include "bake/report_page.hpp"
+#include "bake/svg_plot.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
 

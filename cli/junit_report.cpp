@@ -1,6 +1,6 @@
 #include "cli/junit_report.hpp"
 
-#include "cli/markup.hpp"
+#include "bake/markup.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"
 

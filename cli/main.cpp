@@ -15,15 +15,15 @@
 
 #include <unistd.h>
 
+#include "bake/command_errors.hpp"
+#include "bake/run_bake.hpp"
+#include "bake/shell_quote.hpp"
 #include "cli/bench_command.hpp"
-#include "cli/command_errors.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/export_command.hpp"
 #include "cli/farm_command.hpp"
 #include "cli/image_metrics.hpp"
-#include "cli/run_command.hpp"
 #include "cli/scene_command.hpp"
-#include "cli/shell_quote.hpp"
 #include "cli/verify_command.hpp"
 #include "cli/wedge.hpp"
 #include "core/broad_phase/broad_phase.hpp"
@@ -417,7 +417,7 @@ int main(int argc, char** argv) {
   if (runApp->parsed()) {
     softbake::landRunOptions(run);
     run.commandLine = shellCommandLine(argc, argv);
-    return softbake::runCommand(run);
+    return softbake::runBake(run);
   }
   if (exportApp->parsed()) return softbake::exportCommand(exportOptions);
   if (wedgeApp->parsed() || farmApp->parsed()) {

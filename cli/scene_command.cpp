@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 
-#include "cli/command_errors.hpp"
+#include "bake/command_errors.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "importers/bench_scenes.hpp"

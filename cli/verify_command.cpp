@@ -5,7 +5,7 @@
 #include <map>
 #include <set>
 
-#include "cli/command_errors.hpp"
+#include "bake/command_errors.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "output/cache_format.hpp"

@@ -9,7 +9,7 @@
 #include <map>
 #include <thread>
 
-#include "cli/command_errors.hpp"
+#include "bake/command_errors.hpp"
 #include "cli/scene_command.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"

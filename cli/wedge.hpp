@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/run_command.hpp"
+#include "bake/run_bake.hpp"
 
 namespace softbake {
 

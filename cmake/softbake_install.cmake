@@ -17,7 +17,7 @@ set(SOFTBAKE_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/softbake CACHE STRIN
 set(softbake_install_includedir ${CMAKE_INSTALL_INCLUDEDIR}/softbake)
 
 # In the order they depend on each other; softbakeConfig.cmake knows the same order.
-set(softbake_components core output importers exporters render cli)
+set(softbake_components core output importers exporters render bake cli)
 
 # Every library links this warnings target privately; a static library's private links are still
 # named in what it exports (as link-only), so it travels in the core set. It carries no flags to a

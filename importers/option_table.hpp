@@ -3,7 +3,7 @@
 /// its range or choices, its help text and where it lands. The command line's options
 /// (cli/main.cpp), the keywords of Python's run() and Simulation() (python/run_options.cpp), the
 /// checks of the scene keys (scene_file.cpp) and the run's record in its manifest
-/// (cli/run_record.cpp) are all made from it, so an option is added in one place.
+/// (bake/run_record.cpp) are all made from it, so an option is added in one place.
 ///
 /// Values travel as JSON, as a scene file holds them: what a command line or a keyword gives is
 /// turned into the JSON value its scene key takes ("4" into 4, "1280x720" into [1280, 720]), and
@@ -45,7 +45,7 @@ enum OptionCommand : unsigned {
 ///    checked as a scene file's value is;
 ///  - a field of SceneLoadOptions (`load`): in force while the scene loads;
 ///  - otherwise one of the run's own settings, which the command that owns it reads
-///    (cli/run_options.cpp lands them in RunOptions).
+///    (bake/run_options.cpp lands them in RunOptions).
 using LoadField =
     std::variant<std::monostate, bool SceneLoadOptions::*,
                  std::optional<std::uint64_t> SceneLoadOptions::*, std::size_t SceneLoadOptions::*>;

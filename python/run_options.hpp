@@ -9,7 +9,7 @@
 
 #include <pybind11/pybind11.h>
 
-#include "cli/run_options.hpp"
+#include "bake/run_options.hpp"
 
 namespace softbake::python {
 

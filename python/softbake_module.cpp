@@ -20,10 +20,10 @@
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/interruption.hpp"
-#include "cli/run_command.hpp"
-#include "cli/scene_input.hpp"
-#include "cli/shell_quote.hpp"
+#include "bake/interruption.hpp"
+#include "bake/run_bake.hpp"
+#include "bake/scene_input.hpp"
+#include "bake/shell_quote.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
@@ -278,7 +278,7 @@ py::array bodyView(py::object self, py::handle body, bool velocities) {
 /// softbake.Error, once the module has made it.
 PyObject* errorClass = nullptr;
 
-/// One `softbake.run()` at a time: runCommand() installs process-wide signal handlers and the
+/// One `softbake.run()` at a time: runBake() installs process-wide signal handlers and the
 /// error capture redirects the process's stderr.
 std::mutex runMutex;
 
@@ -308,7 +308,7 @@ int run(py::object scene, py::object out, py::kwargs keywords) {
     const std::lock_guard lock(runMutex);
     std::fflush(stdout);
     StderrTail stderrTail;
-    code = runCommand(options);
+    code = runBake(options);
     std::fflush(stdout);
     reported = reportedError(stderrTail.finish());
   }

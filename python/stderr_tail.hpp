@@ -1,5 +1,5 @@
 #pragma once
-/// What `softbake.run()` needs to raise the error the command prints. runCommand() reports a
+/// What `softbake.run()` needs to raise the error the command prints. runBake() reports a
 /// failure the way the command does, on stderr ("\nsoftbake: error: MESSAGE\n", exit code 1), and
 /// does not throw; while a StderrTail lives, file descriptor 2 goes through a pipe whose reader
 /// passes everything on to where stderr went before, so the user still sees it, and keeps the end.

@@ -1,6 +1,6 @@
 // What the progress display writes to stderr: a line every tenth of the run for a log, a redrawn
 // bar on a terminal (a pseudo-terminal here), and nothing when quiet.
-#include "cli/progress_display.hpp"
+#include "bake/progress_display.hpp"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

@@ -32,7 +32,7 @@ function(step name)
 endfunction()
 
 step("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix} --config ${CONFIG})
-foreach(file bin/softbake include/softbake/core/simulator.hpp include/softbake/cli/run_command.hpp
+foreach(file bin/softbake include/softbake/core/simulator.hpp include/softbake/bake/run_bake.hpp
              share/doc/softbake/LICENSE share/doc/softbake/THIRD_PARTY.md)
   if(NOT EXISTS ${prefix}/${file})
     message(FATAL_ERROR "package: the install has no ${file}")

@@ -1,4 +1,4 @@
-#include "cli/run_outputs.hpp"
+#include "bake/run_outputs.hpp"
 
 #include <cstdio>
 #include <regex>

@@ -1,4 +1,4 @@
-#include "cli/run_options.hpp"
+#include "bake/run_options.hpp"
 
 #include <map>
 #include <stdexcept>

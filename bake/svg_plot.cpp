@@ -1,10 +1,10 @@
-#include "cli/svg_plot.hpp"
+#include "bake/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "cli/markup.hpp"
+#include "bake/markup.hpp"
 #include "core/text.hpp"
 
 namespace softbake {

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli/frame_stats.hpp"
+#include "bake/frame_stats.hpp"
 
 namespace softbake {
 

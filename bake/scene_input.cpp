@@ -1,4 +1,4 @@
-#include "cli/scene_input.hpp"
+#include "bake/scene_input.hpp"
 
 #include <cctype>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "cli/markup.hpp"
+#include "bake/markup.hpp"
 
 namespace softbake {
 

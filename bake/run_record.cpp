@@ -1,4 +1,4 @@
-#include "cli/run_record.hpp"
+#include "bake/run_record.hpp"
 
 #include "core/error.hpp"
 #include "core/text.hpp"

@@ -1,6 +1,6 @@
-#include "cli/report_page.hpp"
+#include "bake/report_page.hpp"
 
-#include "cli/markup.hpp"
+#include "bake/markup.hpp"
 #include "core/text.hpp"
 
 namespace softbake {

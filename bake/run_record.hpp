@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/run_options.hpp"
+#include "bake/run_options.hpp"
 #include "importers/scene_file.hpp"
 
 namespace softbake {

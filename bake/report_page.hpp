@@ -1,6 +1,6 @@
 #pragma once
 /// What softbake's HTML reports share (compare's, cli/html_report.hpp, and run's,
-/// cli/bake_report.hpp): the page around them, its base style, and the script that marks every
+/// bake/bake_report.hpp): the page around them, its base style, and the script that marks every
 /// image that did not load. Self-contained: style and script inline, nothing fetched, so a report
 /// opens from a file anywhere its folder is copied.
 

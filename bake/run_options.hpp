@@ -33,7 +33,7 @@ struct RunOptions {
   bool cacheOnly = false;
   std::optional<int> checkpointEvery;  ///< frames between checkpoints; unset: ≤ 10% of the cache
   bool resume = false;                 ///< continue the run whose manifest is in `out`
-  /// Write a bake report into this folder (cli/bake_report.hpp), and the frames' records it is
+  /// Write a bake report into this folder (bake/bake_report.hpp), and the frames' records it is
   /// made from into OUT/frame_stats.jsonl; also when the run fails or is interrupted.
   std::optional<std::filesystem::path> report;
 

@@ -1,4 +1,4 @@
-#include "cli/interruption.hpp"
+#include "bake/interruption.hpp"
 
 namespace softbake {
 

@@ -1,4 +1,4 @@
-#include "cli/frame_stats.hpp"
+#include "bake/frame_stats.hpp"
 
 #include <cmath>
 #include <fstream>

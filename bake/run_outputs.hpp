@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "cli/interruption.hpp"
-#include "cli/progress_display.hpp"
-#include "cli/run_command.hpp"
+#include "bake/interruption.hpp"
+#include "bake/progress_display.hpp"
+#include "bake/run_bake.hpp"
 #include "core/simulator.hpp"
 #include "exporters/vdb_sequence_writer.hpp"
 #include "importers/scene_file.hpp"

@@ -1,4 +1,4 @@
-#include "cli/bake_report.hpp"
+#include "bake/bake_report.hpp"
 
 #include <unistd.h>
 
@@ -14,9 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/markup.hpp"
-#include "cli/report_page.hpp"
-#include "cli/svg_plot.hpp"
+#include "bake/markup.hpp"
+#include "bake/report_page.hpp"
+#include "bake/svg_plot.hpp"
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "output/atomic_file.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-/// What `run --report` records of every frame (cli/bake_report.hpp plots it): the substeps, the
+/// What `run --report` records of every frame (bake/bake_report.hpp plots it): the substeps, the
 /// contacts, the energy and every body's volume after the frame, and the wall time of its
 /// substeps. The records live in OUT/frame_stats.jsonl, one JSON object a line, so that a run
 /// continued with --resume reports the frames an earlier invocation simulated too:

@@ -1,4 +1,4 @@
-#include "cli/progress_display.hpp"
+#include "bake/progress_display.hpp"
 
 #include <unistd.h>
 

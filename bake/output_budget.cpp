@@ -1,4 +1,4 @@
-#include "cli/output_budget.hpp"
+#include "bake/output_budget.hpp"
 
 #include "core/error.hpp"
 #include "core/text.hpp"

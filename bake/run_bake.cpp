@@ -1,4 +1,4 @@
-#include "cli/run_command.hpp"
+#include "bake/run_bake.hpp"
 
 #include <tbb/global_control.h>
 
@@ -11,15 +11,15 @@
 #include <regex>
 #include <system_error>
 
-#include "cli/bake_report.hpp"
-#include "cli/command_errors.hpp"
-#include "cli/frame_stats.hpp"
-#include "cli/interruption.hpp"
-#include "cli/output_budget.hpp"
-#include "cli/progress_display.hpp"
-#include "cli/run_outputs.hpp"
-#include "cli/run_record.hpp"
-#include "cli/scene_input.hpp"
+#include "bake/bake_report.hpp"
+#include "bake/command_errors.hpp"
+#include "bake/frame_stats.hpp"
+#include "bake/interruption.hpp"
+#include "bake/output_budget.hpp"
+#include "bake/progress_display.hpp"
+#include "bake/run_outputs.hpp"
+#include "bake/run_record.hpp"
+#include "bake/scene_input.hpp"
 #include "core/error.hpp"
 #include "core/simulator.hpp"
 #include "core/text.hpp"
@@ -619,7 +619,7 @@ int run(const RunOptions& options) {
 
 }  // namespace
 
-int runCommand(const RunOptions& options) {
+int runBake(const RunOptions& options) {
   return reportingErrors([&] { return run(options); });
 }
 
