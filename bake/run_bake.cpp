@@ -203,10 +203,11 @@ struct BakeResult {
 /// Simulates frames `firstFrame` + 1 … the last (the simulator starts at `firstFrame`) and hands
 /// the writers every frame the plan asks for; stops early, after a whole frame, when a signal asks
 /// or the simulation fails. With `recorder`, records every frame for the report.
-BakeResult bake(Simulator& simulator, int firstFrame, const WritePlan& plan, int checkpointEvery,
-                std::optional<std::size_t> cacheSink, FramePipeline& pipeline,
-                ProgressDisplay& progress, const InterruptionGuard& interruption,
-                std::vector<std::uint64_t>& setAsidePairs, FrameStatsRecorder* recorder) {
+BakeResult simulateFrames(Simulator& simulator, int firstFrame, const WritePlan& plan,
+                          int checkpointEvery, std::optional<std::size_t> cacheSink,
+                          FramePipeline& pipeline, ProgressDisplay& progress,
+                          const InterruptionGuard& interruption,
+                          std::vector<std::uint64_t>& setAsidePairs, FrameStatsRecorder* recorder) {
   const SimulationState& state = simulator.state();
   const SimulationSettings& settings = simulator.topology().settings;
   BakeResult result;
@@ -303,167 +304,307 @@ void requireSameRun(const RunOptions& options, const nlohmann::ordered_json& rec
                     "\nRun again without --resume to start over."));
 }
 
-int run(const RunOptions& options) {
-  std::optional<tbb::global_control> threadLimit;
-  if (options.threads > 0)
-    threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(options.threads));
+/// One bake, stage by stage: plan (load, check, build; nothing is written), open the outputs,
+/// simulate into the cache and the live writers, write from the cache what waits for the whole
+/// shot, and report. Each stage reads what the stages before it settled.
+class Bake {
+ public:
+  /// The plan: everything that can refuse the run does so here, before any file is written.
+  explicit Bake(const RunOptions& options) : options_(options) {
+    if (options.threads > 0)
+      threadLimit_.emplace(tbb::global_control::max_allowed_parallelism,
+                           std::size_t(options.threads));
+    scene_ = loadSceneInput(options.input, options.load);
+    applySceneOptions(options.given, scene_);
+    if (!options.quiet)
+      for (const std::string& note : scene_.notes) std::printf("note: %s\n", note.c_str());
+    printWarnings(scene_);
+    render_ = renderOptions(scene_.render);
+    requireOutputWithin(scene_, render_.width, render_.height, options.maxOutputGib * 0x1p30);
 
-  SceneFile scene = loadSceneInput(options.input, options.load);
-  applySceneOptions(options.given, scene);
-  if (!options.quiet)
-    for (const std::string& note : scene.notes) std::printf("note: %s\n", note.c_str());
-  printWarnings(scene);
-  const RenderOptions render = renderOptions(scene.render);
-  requireOutputWithin(scene, render.width, render.height, options.maxOutputGib * 0x1p30);
+    BuildReport report;
+    simulator_ = std::make_unique<Simulator>(buildSceneTopology(scene_.setup, &report));
+    if (!options.quiet)
+      for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
+    name_ = scene_.setup.name;
+    frames_ = topology().settings.frames;
+    describeRun(name_, *simulator_, options.quiet);
+    if (scene_.output.vdb) vdb_ = vdbOptions(options, topology());
+    checkpointEvery_ = checkpointInterval(options, *simulator_);
+    record_ = runRecord(options, scene_, checkpointEvery_);
+    if (options.resume) requireSameRun(options, record_);
 
-  BuildReport report;
-  Simulator simulator(buildSceneTopology(scene.setup, &report));
-  if (!options.quiet)
-    for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
-  const SceneTopology& topology = simulator.topology();
-  const std::string& name = scene.setup.name;
-  describeRun(name, simulator, options.quiet);
-  std::optional<VdbOptions> vdb;
-  if (scene.output.vdb) vdb = vdbOptions(options, topology);
-  const int checkpointEvery = checkpointInterval(options, simulator);
-  const nlohmann::ordered_json record = runRecord(options, scene, checkpointEvery);
-  const int frames = topology.settings.frames;
-  if (options.resume) requireSameRun(options, record);
-
-  // With the cache, PNG frames are rendered from it once the shot is simulated, the camera framed
-  // on all of it, and the point caches, which need every frame in order, are written from it too;
-  // without, or when asked, as the frames are simulated.
-  if (options.cacheOnly && !options.cache)
-    throw Error("--cache-only and --no-cache leave nothing to write");
-  const bool afterFromCache = options.cache && !options.cacheOnly;
-  const bool renderAfter = scene.output.png && afterFromCache && !options.renderWhileSimulating;
-  if (scene.output.png && !options.cache && !options.renderWhileSimulating && !options.quiet)
-    std::printf(
-        "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
-        "framed on the first frame\n");
-  const char upAxis = options.upAxis ? (*options.upAxis)[0] : 'y';
-
-  // The renderer needs an EGL driver: found out now, before any file is written, not when the
-  // first frame renders (after the whole simulation, when frames render from the cache).
-  if (scene.output.png && !options.cacheOnly) {
-    const EglContext probe(render.egl);
+    // With the cache, PNG frames are rendered from it once the shot is simulated, the camera
+    // framed on all of it, and the point caches, which need every frame in order, are written
+    // from it too; without, or when asked, as the frames are simulated.
+    if (options.cacheOnly && !options.cache)
+      throw Error("--cache-only and --no-cache leave nothing to write");
+    afterFromCache_ = options.cache && !options.cacheOnly;
+    renderAfter_ = scene_.output.png && afterFromCache_ && !options.renderWhileSimulating;
+    if (scene_.output.png && !options.cache && !options.renderWhileSimulating && !options.quiet)
+      std::printf(
+          "note: --no-cache: PNG frames are rendered as they are simulated, the camera "
+          "framed on the first frame\n");
+    // The renderer needs an EGL driver: found out now, not when the first frame renders (after
+    // the whole simulation, when frames render from the cache).
+    if (scene_.output.png && !options.cacheOnly) {
+      const EglContext probe(render_.egl);
+    }
   }
 
-  // Everything above validated the input: only now is anything written.
-  makeDirectories(options.out);
-  // The frames' records of an earlier run in this folder belong to another run; a resumed run
-  // continues them.
-  const fs::path frameStatsFile = options.out / "frame_stats.jsonl";
-  if (!options.resume) {
-    std::error_code ignored;
-    fs::remove(frameStatsFile, ignored);
+  /// The remaining stages; returns the exit code.
+  int run() {
+    openOutputs();
+    std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
+    ProgressDisplay progress(frames_, options_.quiet);
+    const InterruptionGuard interruption;
+    try {
+      simulate(progress, interruption);
+      if (afterFromCache_ && result_.failure.empty() && result_.stoppedBy == 0) {
+        progress.finish();
+        writeFromCache(interruption);
+      }
+    } catch (const Error& error) {
+      progress.finish();
+      try {
+        recordEnd(RunStatus::Failed, error.what());
+      } catch (const Error&) {
+        // The first error is the one to report; the manifest stays as it was.
+      }
+      writeReportAfterFailure("failed", error.what(), 0, progress.elapsedSeconds());
+      throw;
+    }
+    progress.finish();
+    return finish(progress.elapsedSeconds());
   }
-  std::optional<FrameStatsRecorder> recorder;
-  if (options.report) {
-    makeDirectories(*options.report);  // a folder that cannot be made fails before the work
-    recorder.emplace(topology, frameStatsFile);
+
+ private:
+  const SceneTopology& topology() const { return simulator_->topology(); }
+
+  /// Only now is anything written: the folders, the sinks, the manifest of a run in progress;
+  /// a resumed run is restored to the checkpoint it continues from.
+  void openOutputs() {
+    makeDirectories(options_.out);
+    // The frames' records of an earlier run in this folder belong to another run; a resumed run
+    // continues them.
+    const fs::path frameStatsFile = options_.out / "frame_stats.jsonl";
+    if (!options_.resume) {
+      std::error_code ignored;
+      fs::remove(frameStatsFile, ignored);
+    }
+    if (options_.report) {
+      makeDirectories(*options_.report);  // a folder that cannot be made fails before the work
+      recorder_.emplace(topology(), frameStatsFile);
+    }
+    manifest_ = describeScene(topology(), name_, frames_, scene_.output.framePadding);
+    manifest_.run = record_;
+    manifest_.status = RunStatus::Incomplete;
+    manifest_.reason = "in progress, or killed: continue it with --resume";
+    OutputOptions liveOutput = scene_.output;
+    if (renderAfter_) liveOutput.png = false;
+    if (options_.cacheOnly)
+      liveOutput.obj = liveOutput.contacts = liveOutput.png = liveOutput.vdb = liveOutput.pc2 =
+          liveOutput.mdd = false;
+    sinks_ = openSinks(options_, name_, liveOutput, simulator_->sharedTopology(), render_, vdb_,
+                       checkpointEvery_, options_.resume, manifest_);
+    if (options_.cache) {
+      cache_.emplace(options_.out, name_, scene_.output.framePadding);
+      cacheSink_ = sinks_.size() - 1;
+    }
+    const char upAxis = options_.upAxis ? (*options_.upAxis)[0] : 'y';
+    pointCaches_ = openPointCacheWriters(name_, liveOutput, simulator_->sharedTopology(),
+                                         options_.out, upAxis, manifest_);
+    pointCachesNeeded_ =
+        !pointCaches_.empty() && (!options_.resume || !pointCachesWritten(options_.out, manifest_));
+    // The PNG sequence is listed now, so a killed run's manifest names it too; its renderer is
+    // made once the shot's bounds are known.
+    rendered_ = manifest_;
+    rendered_.sequences.clear();
+    if (renderAfter_) openRenderer(render_, options_.resume, rendered_);
+    everything_ = manifest_;
+    everything_.sequences.insert(everything_.sequences.end(), rendered_.sequences.begin(),
+                                 rendered_.sequences.end());
+
+    plan_ =
+        planWrites(options_.out, manifest_, frames_, !options_.resume, cache_, checkpointEvery_);
+    if (!afterFromCache_ && pointCachesNeeded_) {
+      // Written live: they take every frame, from the first (without a cache a run starts there).
+      for (std::unique_ptr<FrameSink>& writer : pointCaches_) {
+        const std::uint64_t bit = std::uint64_t(1) << sinks_.size();
+        for (std::uint64_t& mask : plan_.sinksPerFrame) mask |= bit;
+        sinks_.push_back(std::move(writer));
+      }
+      plan_.firstIncompleteFrame = 1;
+    }
+    if (options_.resume)
+      for (const OutputSequence& sequence : everything_.sequences)
+        removeTemporaryFiles(options_.out / fs::path(sequence.pattern).parent_path(), name_);
+    firstFrame_ = plan_.firstIncompleteFrame > frames_
+                      ? frames_ + 1  // nothing is missing: nothing to simulate
+                      : restoreForResume(manifest_, plan_, cache_, *simulator_);
+    if (recorder_ && firstFrame_ > 1)
+      if (std::string note = recorder_->keepSaved(std::min(firstFrame_, frames_)); !note.empty())
+        reportNotes_.push_back(std::move(note));
+    if (simulator_->initiallySetAsidePairs() > 0) {
+      // A resumed run keeps the counts of the frames it does not simulate again.
+      if (options_.resume) everything_.setAsidePairs = readManifest(options_.out).setAsidePairs;
+      everything_.setAsidePairs.resize(std::size_t(frames_), 0);
+      everything_.setAsidePairs[0] = simulator_->initiallySetAsidePairs();
+    }
+    everything_.run = record_;
+    everything_.status = RunStatus::Incomplete;
+    everything_.reason = manifest_.reason;
+    everything_.framesComplete =
+        planWrites(options_.out, everything_, frames_, !options_.resume, cache_, checkpointEvery_)
+            .firstIncompleteFrame -
+        1;
+    writeManifest(options_.out, everything_);
   }
-  std::vector<std::string> reportNotes;
-  Manifest manifest = describeScene(topology, name, frames, scene.output.framePadding);
-  manifest.run = record;
-  manifest.status = RunStatus::Incomplete;
-  manifest.reason = "in progress, or killed: continue it with --resume";
-  OutputOptions liveOutput = scene.output;
-  if (renderAfter) liveOutput.png = false;
-  if (options.cacheOnly)
-    liveOutput.obj = liveOutput.contacts = liveOutput.png = liveOutput.vdb = liveOutput.pc2 =
-        liveOutput.mdd = false;
-  std::vector<std::unique_ptr<FrameSink>> sinks =
-      openSinks(options, name, liveOutput, simulator.sharedTopology(), render, vdb, checkpointEvery,
-                options.resume, manifest);
-  std::optional<CacheLayout> cache;
-  std::optional<std::size_t> cacheSink;
-  if (options.cache) {
-    cache.emplace(options.out, name, scene.output.framePadding);
-    cacheSink = sinks.size() - 1;
-  }
-  std::vector<std::unique_ptr<FrameSink>> pointCaches = openPointCacheWriters(
-      name, liveOutput, simulator.sharedTopology(), options.out, upAxis, manifest);
-  const bool pointCachesNeeded =
-      !pointCaches.empty() && (!options.resume || !pointCachesWritten(options.out, manifest));
-  // Rendering from the cache after the simulation: the PNG writer alone.
-  const auto openRenderer = [&](const RenderOptions& framing, bool keepExisting, Manifest& listed) {
+
+  /// Rendering from the cache after the simulation: the PNG writer alone.
+  std::vector<std::unique_ptr<FrameSink>> openRenderer(const RenderOptions& framing,
+                                                       bool keepExisting, Manifest& listed) {
     OutputOptions pngOnly;
     pngOnly.obj = false;
     pngOnly.png = true;
-    pngOnly.framePadding = scene.output.framePadding;
-    RunOptions noCache = options;
+    pngOnly.framePadding = scene_.output.framePadding;
+    RunOptions noCache = options_;
     noCache.cache = false;
-    return openSinks(noCache, name, pngOnly, simulator.sharedTopology(), framing, vdb, 0,
+    return openSinks(noCache, name_, pngOnly, simulator_->sharedTopology(), framing, vdb_, 0,
                      keepExisting, listed);
-  };
-  // The PNG sequence is listed now, so a killed run's manifest names it too; its renderer is
-  // made once the shot's bounds are known.
-  Manifest rendered = manifest;
-  rendered.sequences.clear();
-  if (renderAfter) openRenderer(render, options.resume, rendered);
-  Manifest everything = manifest;
-  everything.sequences.insert(everything.sequences.end(), rendered.sequences.begin(),
-                              rendered.sequences.end());
+  }
 
-  WritePlan plan =
-      planWrites(options.out, manifest, frames, !options.resume, cache, checkpointEvery);
-  if (!afterFromCache && pointCachesNeeded) {
-    // Written live: they take every frame, from the first (without a cache a run starts there).
-    for (std::unique_ptr<FrameSink>& writer : pointCaches) {
-      const std::uint64_t bit = std::uint64_t(1) << sinks.size();
-      for (std::uint64_t& mask : plan.sinksPerFrame) mask |= bit;
-      sinks.push_back(std::move(writer));
+  /// The frames simulated into the cache and the live writers.
+  void simulate(ProgressDisplay& progress, const InterruptionGuard& interruption) {
+    FramePipeline pipeline(std::move(sinks_), topology().particleCount());
+    result_ = simulateFrames(*simulator_, firstFrame_, plan_, checkpointEvery_, cacheSink_,
+                             pipeline, progress, interruption, everything_.setAsidePairs,
+                             recorder_ ? &*recorder_ : nullptr);
+    pipeline.finish();
+    bytesWritten_ = pipeline.bytesWritten();
+  }
+
+  /// What waits for the whole shot, written from the cache: the PNG frames, framed on all of it,
+  /// and the point caches.
+  void writeFromCache(const InterruptionGuard& interruption) {
+    std::vector<std::unique_ptr<FrameSink>> after;
+    std::vector<std::uint64_t> masks(std::size_t(frames_), 0);
+    if (renderAfter_) {
+      const WritePlan renderPlan =
+          planWrites(options_.out, rendered_, frames_, !options_.resume, std::nullopt, 0);
+      if (renderPlan.firstIncompleteFrame <= frames_) {
+        RenderOptions framed = render_;
+        framed.shotBounds = cache_->shotBounds(frames_);
+        Manifest unused;
+        after = openRenderer(framed, /*keepExisting=*/true, unused);
+        masks = renderPlan.sinksPerFrame;
+      }
     }
-    plan.firstIncompleteFrame = 1;
+    if (pointCachesNeeded_)
+      for (std::unique_ptr<FrameSink>& writer : pointCaches_) {
+        const std::uint64_t bit = std::uint64_t(1) << after.size();
+        for (std::uint64_t& mask : masks) mask |= bit;
+        after.push_back(std::move(writer));
+      }
+    if (after.empty()) return;
+    FramePipeline pipeline(std::move(after), topology().particleCount());
+    ProgressDisplay writing(frames_, options_.quiet);
+    const int last =
+        softbake::writeFromCache(*cache_, 1, frames_, masks, pipeline, writing, &interruption);
+    writing.finish();
+    if (last < frames_) {
+      result_.stoppedBy = interruption.signal();
+      result_.lastFrame = last;
+    }
+    bytesWritten_ += pipeline.bytesWritten();
   }
-  if (options.resume)
-    for (const OutputSequence& sequence : everything.sequences)
-      removeTemporaryFiles(options.out / fs::path(sequence.pattern).parent_path(), name);
-  const int firstFrame = plan.firstIncompleteFrame > frames
-                             ? frames + 1  // nothing is missing: nothing to simulate
-                             : restoreForResume(manifest, plan, cache, simulator);
-  if (recorder && firstFrame > 1)
-    if (std::string note = recorder->keepSaved(std::min(firstFrame, frames)); !note.empty())
-      reportNotes.push_back(std::move(note));
-  if (simulator.initiallySetAsidePairs() > 0) {
-    // A resumed run keeps the counts of the frames it does not simulate again.
-    if (options.resume) everything.setAsidePairs = readManifest(options.out).setAsidePairs;
-    everything.setAsidePairs.resize(std::size_t(frames), 0);
-    everything.setAsidePairs[0] = simulator.initiallySetAsidePairs();
-  }
-  everything.run = record;
-  everything.status = RunStatus::Incomplete;
-  everything.reason = manifest.reason;
-  everything.framesComplete =
-      planWrites(options.out, everything, frames, !options.resume, cache, checkpointEvery)
-          .firstIncompleteFrame -
-      1;
-  writeManifest(options.out, everything);
 
-  // From here a failure is recorded in the manifest, with how far the run got.
-  const auto recordEnd = [&](RunStatus status, std::string reason) {
-    everything.status = status;
-    everything.reason = std::move(reason);
-    everything.framesComplete =
-        planWrites(options.out, everything, frames, false, cache, checkpointEvery)
+  /// How the run ended, in the manifest, with how far it got.
+  void recordEnd(RunStatus status, std::string reason) {
+    everything_.status = status;
+    everything_.reason = std::move(reason);
+    everything_.framesComplete =
+        planWrites(options_.out, everything_, frames_, false, cache_, checkpointEvery_)
             .firstIncompleteFrame -
         1;
-    writeManifest(options.out, everything);
-  };
-  // The report, for as many frames as were simulated, however the run ended.
-  const auto writeReport = [&](const std::string& status, const std::string& failure,
-                               int failedFrame, double seconds) {
-    if (!recorder) return;
-    recorder->save();
+    writeManifest(options_.out, everything_);
+  }
+
+  /// The end: the manifest's status, the summary, the report. Throws for a failed simulation;
+  /// returns the exit code of an interrupted or complete run.
+  int finish(double seconds) {
+    if (!result_.failure.empty()) {
+      recordEnd(RunStatus::Failed, result_.failure);
+      writeReportAfterFailure("failed", result_.failure, result_.lastFrame + 1, seconds);
+      throw SimulationFailure(result_.failure);
+    }
+    if (result_.stoppedBy != 0) {
+      const std::string reason =
+          cat("interrupted by ", signalName(result_.stoppedBy), " after frame ", result_.lastFrame);
+      recordEnd(RunStatus::Incomplete, reason);
+      writeReportAfterFailure("interrupted", reason, 0, seconds);
+      std::fflush(stdout);
+      std::fprintf(
+          stderr,
+          "\nsoftbake: interrupted by %s after frame %d of %d; frames 1 to %d are "
+          "complete. Continue with:\n  %s --resume\n",
+          signalName(result_.stoppedBy), result_.lastFrame, frames_, everything_.framesComplete,
+          options_.commandLine.empty() ? "softbake run ..." : options_.commandLine.c_str());
+      return interruptedExitCode(result_.stoppedBy);
+    }
+    recordEnd(RunStatus::Complete, "");
+    printSummary(seconds);
+    writeReport("complete", "", 0, seconds);
+    return 0;
+  }
+
+  void printSummary(double seconds) const {
+    const double steps = double(simulator_->stepsTaken());
+    if (options_.resume)
+      std::printf("resumed: wrote %d missing frames (%s) to %s in %.2f s\n", result_.framesWritten,
+                  formatBytes(bytesWritten_).c_str(), options_.out.string().c_str(), seconds);
+    else
+      // Frame 1 is the initial state: the rate counts the frames that were simulated.
+      std::printf(
+          "wrote %d frames (%s) to %s in %.2f s: %.1f simulated frames/s, %.0f steps, %.0f "
+          "steps/s\n",
+          frames_, formatBytes(bytesWritten_).c_str(), options_.out.string().c_str(), seconds,
+          seconds > 0 ? (frames_ - 1) / seconds : 0.0, steps, seconds > 0 ? steps / seconds : 0.0);
+    if (simulator_->collides())
+      std::printf(
+          "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "
+          "plane contacts %zu\n",
+          result_.totals.contacts, result_.totals.responses.particleResponses,
+          result_.totals.responses.cornerResponses, result_.totals.responses.edgePushes,
+          result_.totals.planeContacts);
+    else if (!topology().planes.empty())
+      std::printf("plane contacts over all substeps: %zu\n", result_.totals.planeContacts);
+    if (!everything_.setAsidePairs.empty())
+      std::printf(
+          "initial overlaps: %zu triangle pairs set aside at the start, %llu still at frame %d "
+          "(per frame in the manifest's set_aside_pairs)\n",
+          simulator_->initiallySetAsidePairs(),
+          static_cast<unsigned long long>(everything_.setAsidePairs.back()), frames_);
+    for (const OutputSequence& sequence : everything_.sequences)
+      std::printf("%s sequence: %s\n", sequence.format.c_str(),
+                  (options_.out / sequence.pattern).string().c_str());
+    std::printf("manifest: %s\n", (options_.out / "manifest.json").string().c_str());
+  }
+
+  /// The report, for as many frames as were simulated, however the run ended.
+  void writeReport(const std::string& status, const std::string& failure, int failedFrame,
+                   double seconds) {
+    if (!recorder_) return;
+    recorder_->save();
+    const SceneTopology& topology = this->topology();
     BakeReport contents;
-    contents.scene = name;
-    contents.input = options.input;
-    contents.out = options.out;
-    contents.frames = frames;
+    contents.scene = name_;
+    contents.input = options_.input;
+    contents.out = options_.out;
+    contents.frames = frames_;
     contents.fps = topology.settings.fps;
     contents.integrator = std::string(integratorName(topology.settings.integrator));
-    const SubstepChoice& substeps = simulator.substeps();
+    const SubstepChoice& substeps = simulator_->substeps();
     contents.substeps = substeps.automatic ? "auto" : std::to_string(substeps.substeps);
     // "auto" of the integrators stable at any step stops at kMaxAutoSubsteps, unless XPBD's own
     // floor is above it.
@@ -474,27 +615,28 @@ int run(const RunOptions& options) {
     for (const Body& body : topology.bodies)
       contents.bodies.push_back(
           {body.name, body.closed, body.restVolume, body.material.bulkModulus > 0});
-    contents.records = recorder->records();
+    contents.records = recorder_->records();
     contents.wallSeconds = seconds;
     contents.status = status;
     contents.failure = failure;
     contents.failedFrame = failedFrame;
-    contents.notes = reportNotes;
-    for (const OutputSequence& sequence : everything.sequences)
+    contents.notes = reportNotes_;
+    for (const OutputSequence& sequence : everything_.sequences)
       if (sequence.format == "png")
-        for (int frame = 1; frame <= frames; ++frame) {
+        for (int frame = 1; frame <= frames_; ++frame) {
           const fs::path png =
-              options.out / sequenceFilePath(sequence, everything.framePadding, frame);
+              options_.out / sequenceFilePath(sequence, everything_.framePadding, frame);
           std::error_code error;
           if (fs::is_regular_file(png, error)) contents.pngFrames.emplace_back(frame, png);
         }
-    writeBakeReport(*options.report, contents);
-    std::printf("report: %s\n", (*options.report / "index.html").string().c_str());
-  };
-  // After a failure, the failure is what the run exits with; a report that cannot be written too
-  // is a warning.
-  const auto writeReportAfterFailure = [&](const std::string& status, const std::string& failure,
-                                           int failedFrame, double seconds) {
+    writeBakeReport(*options_.report, contents);
+    std::printf("report: %s\n", (*options_.report / "index.html").string().c_str());
+  }
+
+  /// After a failure, the failure is what the run exits with; a report that cannot be written too
+  /// is a warning.
+  void writeReportAfterFailure(const std::string& status, const std::string& failure,
+                               int failedFrame, double seconds) {
     try {
       writeReport(status, failure, failedFrame, seconds);
     } catch (const Error& error) {
@@ -502,125 +644,41 @@ int run(const RunOptions& options) {
     } catch (const fs::filesystem_error& error) {
       std::fprintf(stderr, "warning: the report could not be written: %s\n", error.what());
     }
-  };
-  std::fflush(stdout);  // the scene summary comes before the progress lines on stderr
-  ProgressDisplay progress(frames, options.quiet);
-  BakeResult result;
-  std::uint64_t bytesWritten = 0;
-  const InterruptionGuard interruption;
-  try {
-    {
-      FramePipeline pipeline(std::move(sinks), topology.particleCount());
-      result = bake(simulator, firstFrame, plan, checkpointEvery, cacheSink, pipeline, progress,
-                    interruption, everything.setAsidePairs, recorder ? &*recorder : nullptr);
-      pipeline.finish();
-      bytesWritten = pipeline.bytesWritten();
-    }
-    if (afterFromCache && result.failure.empty() && result.stoppedBy == 0) {
-      progress.finish();
-      std::vector<std::unique_ptr<FrameSink>> after;
-      std::vector<std::uint64_t> masks(std::size_t(frames), 0);
-      if (renderAfter) {
-        const WritePlan renderPlan =
-            planWrites(options.out, rendered, frames, !options.resume, std::nullopt, 0);
-        if (renderPlan.firstIncompleteFrame <= frames) {
-          RenderOptions framed = render;
-          framed.shotBounds = cache->shotBounds(frames);
-          Manifest unused;
-          after = openRenderer(framed, /*keepExisting=*/true, unused);
-          masks = renderPlan.sinksPerFrame;
-        }
-      }
-      if (pointCachesNeeded)
-        for (std::unique_ptr<FrameSink>& writer : pointCaches) {
-          const std::uint64_t bit = std::uint64_t(1) << after.size();
-          for (std::uint64_t& mask : masks) mask |= bit;
-          after.push_back(std::move(writer));
-        }
-      if (!after.empty()) {
-        FramePipeline pipeline(std::move(after), topology.particleCount());
-        ProgressDisplay writing(frames, options.quiet);
-        const int last = writeFromCache(*cache, 1, frames, masks, pipeline, writing, &interruption);
-        writing.finish();
-        if (last < frames) {
-          result.stoppedBy = interruption.signal();
-          result.lastFrame = last;
-        }
-        bytesWritten += pipeline.bytesWritten();
-      }
-    }
-  } catch (const Error& error) {
-    progress.finish();
-    try {
-      recordEnd(RunStatus::Failed, error.what());
-    } catch (const Error&) {
-      // The first error is the one to report; the manifest stays as it was.
-    }
-    writeReportAfterFailure("failed", error.what(), 0, progress.elapsedSeconds());
-    throw;
   }
-  progress.finish();
-  const double seconds = progress.elapsedSeconds();
 
-  if (!result.failure.empty()) {
-    recordEnd(RunStatus::Failed, result.failure);
-    writeReportAfterFailure("failed", result.failure, result.lastFrame + 1, seconds);
-    throw SimulationFailure(result.failure);
-  }
-  if (result.stoppedBy != 0) {
-    const std::string reason =
-        cat("interrupted by ", signalName(result.stoppedBy), " after frame ", result.lastFrame);
-    recordEnd(RunStatus::Incomplete, reason);
-    writeReportAfterFailure("interrupted", reason, 0, seconds);
-    std::fflush(stdout);
-    std::fprintf(stderr,
-                 "\nsoftbake: interrupted by %s after frame %d of %d; frames 1 to %d are "
-                 "complete. Continue with:\n  %s --resume\n",
-                 signalName(result.stoppedBy), result.lastFrame, frames, everything.framesComplete,
-                 options.commandLine.empty() ? "softbake run ..." : options.commandLine.c_str());
-    return interruptedExitCode(result.stoppedBy);
-  }
-  recordEnd(RunStatus::Complete, "");
-  manifest = everything;
-
-  const double steps = double(simulator.stepsTaken());
-  if (options.resume)
-    std::printf("resumed: wrote %d missing frames (%s) to %s in %.2f s\n", result.framesWritten,
-                formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds);
-  else
-    // Frame 1 is the initial state: the rate counts the frames that were simulated.
-    std::printf(
-        "wrote %d frames (%s) to %s in %.2f s: %.1f simulated frames/s, %.0f steps, %.0f "
-        "steps/s\n",
-        frames, formatBytes(bytesWritten).c_str(), options.out.string().c_str(), seconds,
-        seconds > 0 ? (frames - 1) / seconds : 0.0, steps, seconds > 0 ? steps / seconds : 0.0);
-  if (simulator.collides())
-    std::printf(
-        "contacts over all substeps: %zu (particle %zu, corner %zu, edge pushes %zu); "
-        "plane contacts %zu\n",
-        result.totals.contacts, result.totals.responses.particleResponses,
-        result.totals.responses.cornerResponses, result.totals.responses.edgePushes,
-        result.totals.planeContacts);
-  else if (!simulator.topology().planes.empty())
-    std::printf("plane contacts over all substeps: %zu\n", result.totals.planeContacts);
-  if (!everything.setAsidePairs.empty())
-    std::printf(
-        "initial overlaps: %zu triangle pairs set aside at the start, %llu still at frame %d "
-        "(per frame in the manifest's set_aside_pairs)\n",
-        simulator.initiallySetAsidePairs(),
-        static_cast<unsigned long long>(everything.setAsidePairs.back()), frames);
-  for (const OutputSequence& sequence : manifest.sequences)
-    std::printf("%s sequence: %s\n", sequence.format.c_str(),
-                (options.out / sequence.pattern).string().c_str());
-  std::printf("manifest: %s\n", (options.out / "manifest.json").string().c_str());
-  writeReport("complete", "", 0, seconds);
-  return 0;
-}
+  const RunOptions& options_;
+  std::optional<tbb::global_control> threadLimit_;  // first made, last gone
+  // The plan.
+  SceneFile scene_;
+  RenderOptions render_;
+  std::unique_ptr<Simulator> simulator_;
+  std::string name_;
+  int frames_ = 0;
+  std::optional<VdbOptions> vdb_;
+  int checkpointEvery_ = 0;
+  nlohmann::ordered_json record_;
+  bool afterFromCache_ = false, renderAfter_ = false;
+  // The outputs.
+  std::optional<FrameStatsRecorder> recorder_;
+  std::vector<std::string> reportNotes_;
+  /// The live sinks' sequences; those rendered from the cache after the simulation; both, as the
+  /// manifest lists them.
+  Manifest manifest_, rendered_, everything_;
+  std::vector<std::unique_ptr<FrameSink>> sinks_, pointCaches_;
+  std::optional<CacheLayout> cache_;
+  std::optional<std::size_t> cacheSink_;
+  bool pointCachesNeeded_ = false;
+  WritePlan plan_;
+  int firstFrame_ = 1;
+  // The simulation.
+  BakeResult result_;
+  std::uint64_t bytesWritten_ = 0;
+};
 
 }  // namespace
 
 int runBake(const RunOptions& options) {
-  return reportingErrors([&] { return run(options); });
+  return reportingErrors([&] { return Bake(options).run(); });
 }
 
 }  // namespace softbake
