@@ -393,6 +393,23 @@ const OptionSpec& optionSpec(std::string_view name) {
   throw std::logic_error(cat("no option '", name, "' in the option table"));
 }
 
+bool isNegation(const OptionSpec& spec) {
+  return !spec.excludes.empty() && spec.name == cat("no-", spec.excludes);
+}
+
+const OptionSpec* negationOf(const OptionSpec& spec) {
+  for (const OptionSpec& other : optionTable())
+    if (other.excludes == spec.name && isNegation(other)) return &other;
+  return nullptr;
+}
+
+nlohmann::json::json_pointer sceneKeyPointer(const OptionSpec& spec) {
+  std::string path(spec.sceneKey);
+  std::replace(path.begin(), path.end(), '.', '/');
+  path.insert(path.begin(), '/');
+  return nlohmann::json::json_pointer(path);
+}
+
 std::optional<OptionValueError> checkOptionValue(const OptionSpec& spec,
                                                  const nlohmann::json& value, char quote) {
   switch (spec.kind) {
@@ -502,11 +519,7 @@ void applySceneOptions(const GivenOptions& given, SceneFile& scene) {
     const auto found = given.find(std::string(spec.name));
     if (spec.sceneKey.empty() || found == given.end()) continue;
     if (spec.kind == OptionKind::Flag && !found->get<bool>()) continue;  // not given
-    std::string path(spec.sceneKey);
-    std::replace(path.begin(), path.end(), '.', '/');
-    path.insert(path.begin(), '/');
-    document[nlohmann::json::json_pointer(path)] =
-        spec.kind == OptionKind::Flag ? spec.value : *found;
+    document[sceneKeyPointer(spec)] = spec.kind == OptionKind::Flag ? spec.value : *found;
   }
   if (!document.empty()) applySceneKeys(scene, document, "the options");
 }

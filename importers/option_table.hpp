@@ -79,6 +79,14 @@ const std::vector<OptionSpec>& optionTable();
 /// The row named `name`; throws std::logic_error for none, a mistake in the code.
 const OptionSpec& optionSpec(std::string_view name);
 
+/// The flag that says no to `spec` (--no-render for --render: named "no-" + its name, and
+/// excluding it), or null. Python takes the pair as one keyword: render=False is --no-render.
+const OptionSpec* negationOf(const OptionSpec& spec);
+bool isNegation(const OptionSpec& spec);
+
+/// Where `spec`'s scene key is in a scene document: settings.fps is /settings/fps.
+nlohmann::json::json_pointer sceneKeyPointer(const OptionSpec& spec);
+
 /// Why `value` is not one `spec` takes, or nothing when it is.
 struct OptionValueError {
   bool wrongType;       ///< a value of another type (Python's TypeError) rather than out of range

@@ -16,8 +16,7 @@ namespace {
 /// loading, run() every option of `softbake run` but a negation (--no-render is render=False).
 bool takes(KeywordSet set, const OptionSpec& spec) {
   if (set == KeywordSet::Simulation) return (spec.commands & kOptionSimulation) != 0;
-  const bool negation = !spec.excludes.empty() && spec.name == cat("no-", spec.excludes);
-  return (spec.commands & kOptionRun) != 0 && !negation;
+  return (spec.commands & kOptionRun) != 0 && !isNegation(spec);
 }
 
 /// A keyword's value as the JSON value the option table takes; a value of no such type becomes
@@ -83,12 +82,7 @@ std::vector<std::string> applyKeywords(const py::kwargs& given, KeywordSet set, 
     }
     if (spec->kind != OptionKind::Flag || json == true)
       options.given[std::string(spec->name)] = json;
-    else if (const auto negation = std::find_if(optionTable().begin(), optionTable().end(),
-                                                [&](const OptionSpec& s) {
-                                                  return s.excludes == spec->name &&
-                                                         s.name == cat("no-", spec->name);
-                                                });
-             negation != optionTable().end())
+    else if (const OptionSpec* negation = negationOf(*spec))
       options.given[std::string(negation->name)] = true;  // render=False: --no-render
   }
   for (const OptionSpec& spec : optionTable())

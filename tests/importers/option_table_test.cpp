@@ -3,7 +3,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -63,19 +62,11 @@ Json badValue(const OptionSpec& spec) {
   return nullptr;
 }
 
-// The option's scene key as a JSON pointer: settings.fps is /settings/fps.
-Json::json_pointer pointerOf(const OptionSpec& spec) {
-  std::string pointer(spec.sceneKey);
-  std::replace(pointer.begin(), pointer.end(), '.', '/');
-  pointer.insert(pointer.begin(), '/');
-  return Json::json_pointer(pointer);
-}
-
 // A scene of one ball with `value` at the option's key.
 Json sceneWith(const OptionSpec& spec, const Json& value) {
   Json scene =
       Json::parse(R"({"bodies": [{"mesh": {"primitive": "icosphere", "subdivisions": 1}}]})");
-  scene[pointerOf(spec)] = value;
+  scene[sceneKeyPointer(spec)] = value;
   return scene;
 }
 
@@ -139,7 +130,7 @@ TEST(OptionTable, AGivenOptionLandsWhereItsSceneKeyLands) {
     applySceneOptions(given, fromOption);
     // The reference: the value the option lands written into the scene file itself.
     Json file = plain;
-    file[pointerOf(spec)] = spec.kind == OptionKind::Flag ? spec.value : value;
+    file[sceneKeyPointer(spec)] = spec.kind == OptionKind::Flag ? spec.value : value;
     const SceneFile fromFile = parseScene(file, "scene.json", {});
     EXPECT_EQ(settingsOf(fromOption), settingsOf(fromFile)) << spec.name;
     // --no-render lands the default of a scene file (no PNG), which a built-in scene changes.
