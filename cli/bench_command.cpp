@@ -261,9 +261,16 @@ int bench(const BenchOptions& options) {
 
   const SceneFile loaded = loadSceneInput(options.input, options.load);
   printWarnings(loaded);
-  std::vector<std::optional<std::string>> broadPhases(options.broadPhases.begin(),
-                                                      options.broadPhases.end());
-  if (broadPhases.empty()) broadPhases.emplace_back();  // the scene's
+  // One run per broad phase given, each landing as run's --broadphase lands; none: the scene's.
+  std::vector<GivenOptions> runs;
+  if (const auto list = options.given.find("broadphase"); list != options.given.end()) {
+    for (const nlohmann::json& broadPhase : *list) {
+      runs.push_back(options.given);
+      runs.back()["broadphase"] = broadPhase;
+    }
+  } else {
+    runs.push_back(options.given);
+  }
 
   // One column per stage, named as the stages name themselves, so a new stage cannot leave the
   // header a column short.
@@ -274,12 +281,10 @@ int bench(const BenchOptions& options) {
   if (options.withExports && options.out.empty()) scratch.emplace();
   const fs::path exportFolder = scratch ? scratch->path() : options.out;
 
-  for (const std::optional<std::string>& requestedBroadPhase : broadPhases) {
+  for (const GivenOptions& given : runs) {
     SceneFile scene = loaded;
     SimulationSettings& settings = scene.setup.settings;
-    applySceneOptions(options.given, scene);
-    if (options.frames) settings.frames = *options.frames;
-    if (requestedBroadPhase) parseBroadPhase(*requestedBroadPhase, settings.collisions.broadPhase);
+    applySceneOptions(given, scene);
     const std::string broadPhase(broadPhaseName(settings.collisions.broadPhase));
 
     Simulator simulator(buildSceneTopology(scene.setup));

@@ -22,14 +22,14 @@
 namespace softbake {
 
 struct BenchOptions {
-  std::string input;                            ///< scene .json, mesh file or built-in scene name
-  GivenOptions given = GivenOptions::object();  ///< the option table's, as run takes them
-  SceneLoadOptions load;                        ///< landed from `given`
-  std::optional<int> frames;                    ///< overrides the scene's
-  std::optional<long> steps;                    ///< exact substep count instead of whole frames
-  std::vector<std::string> broadPhases;         ///< empty: the scene's
-  long warmupSteps = 0;                         ///< steps simulated before measuring, not reported
-  int threads = 0;                              ///< 0: all cores
+  std::string input;  ///< scene .json, mesh file or built-in scene name
+  /// The option table's, as run takes them, but for "broadphase": an array of broad phases to
+  /// run one after the other.
+  GivenOptions given = GivenOptions::object();
+  SceneLoadOptions load;      ///< landed from `given`
+  std::optional<long> steps;  ///< exact substep count instead of whole frames
+  long warmupSteps = 0;       ///< steps simulated before measuring, not reported
+  int threads = 0;            ///< 0: all cores
   std::optional<std::filesystem::path> csv;
   bool withExports = false;
   std::filesystem::path out;  ///< where exports go; empty: a temporary folder

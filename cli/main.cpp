@@ -9,9 +9,12 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <map>
 #include <string>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 #include <unistd.h>
 
@@ -26,7 +29,6 @@
 #include "cli/scene_command.hpp"
 #include "cli/verify_command.hpp"
 #include "cli/wedge.hpp"
-#include "core/broad_phase/broad_phase.hpp"
 #include "core/scene/scene_setup.hpp"
 #include "render/frame_renderer.hpp"
 
@@ -58,8 +60,10 @@ std::string typeName(const softbake::OptionSpec& spec) {
 }
 
 /// The options of the option table that `command` takes, added to `app`; each writes its value,
-/// checked as the table checks it, into `given`.
-void addTableOptions(CLI::App& app, unsigned command, softbake::GivenOptions& given) {
+/// checked as the table checks it, into `given`. Those named in `lists` take several values,
+/// comma-separated, and write them as an array (bench runs once per broad phase given).
+void addTableOptions(CLI::App& app, unsigned command, softbake::GivenOptions& given,
+                     std::initializer_list<std::string_view> lists = {}) {
   std::map<std::string_view, CLI::Option*> added;
   for (const softbake::OptionSpec& spec : softbake::optionTable()) {
     if (!(spec.commands & command)) continue;
@@ -79,6 +83,20 @@ void addTableOptions(CLI::App& app, unsigned command, softbake::GivenOptions& gi
           return error ? error->message + ", got '" + text + "'" : std::string();
         },
         "", "");
+    if (std::find(lists.begin(), lists.end(), spec.name) != lists.end()) {
+      added[spec.name] = app.add_option_function<std::vector<std::string>>(
+                                names,
+                                [&given, &spec, name](const std::vector<std::string>& texts) {
+                                  given[name] = softbake::GivenOptions::array();
+                                  for (const std::string& text : texts)
+                                    given[name].push_back(optionValueFromText(spec, text));
+                                },
+                                help + "; several, comma-separated, run one after the other")
+                             ->delimiter(',')
+                             ->check(check)
+                             ->type_name(typeName(spec));
+      continue;
+    }
     added[spec.name] = app.add_option_function<std::string>(
                               names,
                               [&given, &spec, name](const std::string& text) {
@@ -315,19 +333,10 @@ CLI::App* addBenchCommand(CLI::App& app, softbake::BenchOptions& bench) {
       ".json, a mesh file or a built-in scene: default, balls1k, balls10k, balls100k, balls1m.");
   benchApp->add_option("scene", bench.input, "scene .json, mesh file or built-in scene name")
       ->required();
-  addTableOptions(*benchApp, softbake::kOptionBench, bench.given);
-  CLI::Option* benchFrames =
-      benchApp->add_option("--frames", bench.frames, "frames to simulate (overrides the scene)")
-          ->check(CLI::Range(2, 10000000));
+  addTableOptions(*benchApp, softbake::kOptionBench, bench.given, {"broadphase"});
   benchApp->add_option("--steps", bench.steps, "simulate exactly this many substeps")
       ->check(CLI::Range(1L, 1000000000L))
-      ->excludes(benchFrames);
-  benchApp
-      ->add_option("--broadphase", bench.broadPhases,
-                   "broad phases to run one after the other: sbhash, spatialhash, bvh, brute "
-                   "(comma-separated; default: the scene's)")
-      ->delimiter(',')
-      ->check(CLI::IsMember(softbake::broadPhaseNames()));
+      ->excludes(benchApp->get_option("--frames"));
   benchApp
       ->add_option("--warmup", bench.warmupSteps,
                    "simulate this many steps first, unmeasured (to reach the contacts)")

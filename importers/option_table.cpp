@@ -89,8 +89,8 @@ std::vector<OptionSpec> makeTable() {
       // The simulation.
       {.name = "frames",
        .kind = K::Whole,
-       .help = "number of frames to write",
-       .commands = kRunSimulation,
+       .help = "number of frames to simulate",
+       .commands = kSimulate,
        .sceneKey = "settings.frames",
        .low = 1,
        .high = 10'000'000,
@@ -125,7 +125,7 @@ std::vector<OptionSpec> makeTable() {
        .kind = K::Choice,
        .help = "collision broad phase: sbhash (the paper's subdivided boxes and box hash), "
                "spatialhash, bvh or brute",
-       .commands = kRunSimulation,
+       .commands = kSimulate,
        .sceneKey = "settings.collisions.broadphase",
        .choices = broadPhaseNames,
        .recorded = true},

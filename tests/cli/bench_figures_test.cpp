@@ -243,5 +243,39 @@ TEST_F(BenchFigures, MaxVolumeErrorIsTheWorstFrameOfTheWrittenBodies) {
   EXPECT_NEAR(reported, worst, 2e-4);
 }
 
+TEST_F(BenchFigures, FramesAndBroadPhasesAreTheTablesRowsAsRunTakesThem) {
+  // bench takes --frames and --broadphase from the option table, as run does: the same words
+  // refuse the same value, and a value lands as the scene key does (frames 3: 2 measured frames).
+  const std::string refusal =
+      "--broadphase: expected 'sbhash', 'spatialhash', 'bvh' or 'brute', "
+      "got 'octree'";
+  for (const char* command : {"run --no-render -q -o ", "bench default --csv "}) {
+    const Result bad = runSoftbake(std::string(command) + quoted((folder_ / "x").string()) +
+                                   " --broadphase octree");
+    EXPECT_EQ(bad.exitCode, 1) << bad.output;
+    EXPECT_NE(bad.output.find(refusal), std::string::npos) << command << bad.output;
+  }
+  // One element of a list is checked as one value is.
+  const Result badInList = runSoftbake("bench default --broadphase bvh,octree");
+  EXPECT_EQ(badInList.exitCode, 1) << badInList.output;
+  EXPECT_NE(badInList.output.find(refusal), std::string::npos) << badInList.output;
+  const Result tooMany = runSoftbake("bench default --frames 0");
+  EXPECT_EQ(tooMany.exitCode, 1) << tooMany.output;
+  EXPECT_NE(tooMany.output.find("--frames: expected a whole number from 1 to 10000000, got '0'"),
+            std::string::npos)
+      << tooMany.output;
+  const Result one = runSoftbake("bench default --frames 1");
+  EXPECT_EQ(one.exitCode, 1) << one.output;
+  EXPECT_NE(one.output.find("at least 2 --frames"), std::string::npos) << one.output;
+
+  const Result run = runSoftbake("bench default --frames 3 --substeps 2 --broadphase brute,bvh");
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const auto lines = summaryLines(run.output);
+  ASSERT_EQ(lines.size(), 2u) << run.output;
+  EXPECT_EQ(lines[0].at("broadphase"), "brute");
+  EXPECT_EQ(lines[1].at("broadphase"), "bvh");
+  for (const auto& line : lines) EXPECT_EQ(number(line, "steps"), 2 * 2);
+}
+
 }  // namespace
 }  // namespace softbake
