@@ -4,16 +4,25 @@
 // last frame. One markdown table row per scene: bench/contacts.sh writes bench/results/contacts.md
 // from them.
 //
-//   contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] [failsafe|nofailsafe]
-//                 [instep|afterstep] [--csv=FILE]
+//   contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] [separate|ignore]
+//                 [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] [--frames=N]
+//
+// A mesh file is baked as `softbake run FILE` bakes it; --frames=N overrides the scene's frames.
 //
 // instep keeps the contacts apart within the implicit solve (collisions.contactsInStep).
 //
 // --csv=FILE appends one row per frame to FILE (scene, variant, frame, intersecting pairs between
-// bodies and within one, contacts per substep, energy above the start in J), with a header when
-// FILE is new: what bench/plot_bench.py contacts draws.
+// bodies and within one, contacts per substep, energy above the start in J, and the new pairs),
+// with a header when FILE is new: what bench/plot_bench.py contacts draws.
+//
+// New pairs: the intersecting triangle pairs of a frame that did not intersect at the start (what
+// the scene placed overlapping is set aside, and its pairs may slide), and of those the ones
+// between two surfaces, or within one, that had no intersecting pair at all at the start: a
+// crossing where nothing overlapped.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -30,11 +39,15 @@ using namespace softbake;
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
-                 "usage: contact_cases SCENE.json [explicit|implicit|xpbd] [separate|ignore] "
-                 "[failsafe|nofailsafe] [instep|afterstep]\n");
+                 "usage: contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] "
+                 "[separate|ignore] [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] "
+                 "[--frames=N]\n");
     return 1;
   }
   std::FILE* csv = nullptr;
+  int frames = 0;
+  if (argc > 2 && std::strncmp(argv[argc - 1], "--frames=", 9) == 0)
+    frames = std::atoi(argv[--argc] + 9);
   if (argc > 2 && std::strncmp(argv[argc - 1], "--csv=", 6) == 0) {
     const char* path = argv[--argc] + 6;
     const bool fresh = !std::filesystem::exists(path);
@@ -44,11 +57,17 @@ int main(int argc, char** argv) {
       return 1;
     }
     if (fresh)
-      std::fprintf(csv, "scene,variant,frame,between,within,contacts_per_substep,energy_above\n");
+      std::fprintf(csv,
+                   "scene,variant,frame,between,within,contacts_per_substep,energy_above,"
+                   "new_pairs,new_where_none\n");
   }
   try {
-    SceneFile file = loadSceneFile(argv[1]);
+    // A mesh file is the scene `softbake run FILE` makes of it.
+    SceneFile file = std::filesystem::path(argv[1]).extension() == ".json"
+                         ? loadSceneFile(argv[1])
+                         : sceneFromMeshFile(argv[1]);
     SimulationSettings& settings = file.setup.settings;
+    if (frames > 0) settings.frames = frames;
     if (argc > 2 && !parseIntegrator(argv[2], settings.integrator))
       throw Error(std::string("unknown integrator ") + argv[2]);
     if (argc > 3 && !parseInitialOverlapMode(argv[3], settings.collisions.initialOverlap))
@@ -62,6 +81,9 @@ int main(int argc, char** argv) {
     Simulator simulator(buildSceneTopology(file.setup));
     simulator.measureStages(true);
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
+    const test::IntersectionCount atStart =
+        test::countIntersectingPairs(simulator.collision(), simulator.state().position);
+    std::size_t worstNew = 0, worstNewWhereNone = 0;
     double highest = start, responseSeconds = 0;
     std::size_t worstBetween = 0, worstWithin = 0, framesBetween = 0, framesWithin = 0;
     std::size_t contacts = 0, substeps = 0;
@@ -90,6 +112,16 @@ int main(int argc, char** argv) {
           test::countIntersectingPairs(simulator.collision(), simulator.state().position);
       checkSeconds +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - checkStart).count();
+      std::size_t newPairs = 0, newWhereNone = 0;
+      const std::vector<Index>& surfaceOf = simulator.collision().triangleSurface;
+      for (const auto& pair : count.pairs) {
+        if (std::binary_search(atStart.pairs.begin(), atStart.pairs.end(), pair)) continue;
+        ++newPairs;
+        const Index a = surfaceOf[pair.first], b = surfaceOf[pair.second];
+        newWhereNone += !atStart.bySurfaces.count({std::min(a, b), std::max(a, b)});
+      }
+      worstNew = std::max(worstNew, newPairs);
+      worstNewWhereNone = std::max(worstNewWhereNone, newWhereNone);
       worstBetween = std::max(worstBetween, count.betweenSurfaces);
       worstWithin = std::max(worstWithin, count.withinSurfaces);
       framesBetween += count.betweenSurfaces > 0;
@@ -98,11 +130,11 @@ int main(int argc, char** argv) {
       highest = std::max(highest, energy);
       if (csv)
         std::fprintf(
-            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f\n",
+            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu\n",
             std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(), frame,
             count.betweenSurfaces, count.withinSurfaces,
             double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
-            energy - start);
+            energy - start, newPairs, newWhereNone);
       // Each frame's row as it is made: a long bake cut short by a time limit keeps its frames.
       if (csv) std::fflush(csv);
     }
@@ -114,7 +146,7 @@ int main(int argc, char** argv) {
     for (const Body& body : simulator.topology().bodies) triangles += body.triangleCount;
     std::printf(
         "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
-        "%.1f | %.2f |\n",
+        "%.1f | %.2f | %zu | %zu |\n",
         std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(),
         simulator.topology().bodies.size(), triangles,
         failure.empty() ? std::to_string(reached).c_str()
@@ -122,7 +154,8 @@ int main(int argc, char** argv) {
         worstBetween, framesBetween, worstWithin, framesWithin,
         substeps ? double(contacts) / double(substeps) : 0.0,
         substeps ? 1e3 * responseSeconds / double(substeps) : 0.0, highest - start,
-        double(reached - 1) / wall, reached > 1 ? double(substeps) / double(reached - 1) : 0.0);
+        double(reached - 1) / wall, reached > 1 ? double(substeps) / double(reached - 1) : 0.0,
+        worstNew, worstNewWhereNone);
     return 0;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "contact_cases: %s\n", error.what());
