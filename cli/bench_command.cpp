@@ -91,6 +91,7 @@ struct StepRecord {
   std::vector<int> frames;     ///< the frame each step computes
   double framesSimulated = 0;  ///< whole frames, plus the finished part of a last partial one
   std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
+  std::uint64_t solverPhases = 0;      ///< and the phases of its parallel regions
   std::uint64_t failsafePasses = 0;    ///< the failsafe's detection passes, all steps
   std::uint64_t frozenSubsteps = 0;    ///< substeps the failsafe ended at their start
   /// The largest |V/V_rest − 1| of any closed body at the end of any frame: how round the bodies
@@ -148,8 +149,10 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       record.pairs.push_back(std::uint32_t(simulator.lastStepCandidatePairs()));
       record.contacts.push_back(std::uint32_t(simulator.contacts().size()));
       record.frames.push_back(frameNumber);
-      if (const auto solve = simulator.lastSolve())
+      if (const auto solve = simulator.lastSolve()) {
         record.solverIterations += solve->stepIterations;
+        record.solverPhases += solve->stepPhases;
+      }
       const FailsafeStats& after = simulator.lastFrameStats().failsafe;
       record.failsafePasses += after.passes - before.passes;
       record.frozenSubsteps += after.frozen - before.frozen;
@@ -327,6 +330,7 @@ int bench(const BenchOptions& options) {
         "steps_per_s=%.1f frames_per_s=%.2f "
         "median_step_ms=%.4f p95_step_ms=%.4f contacts_per_step=%.1f peak_rss_mb=%.1f "
         "bytes_per_face=%.0f integrator=%s solver_iterations_per_step=%.1f "
+        "solver_phases_per_step=%.1f "
         "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu fitted_start=%zu "
         "fitted_end=%zu "
         "failsafe_passes_per_step=%.1f frozen_substeps=%llu\n",
@@ -335,7 +339,8 @@ int bench(const BenchOptions& options) {
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
         peak, peak * 1048576.0 / double(faces),
         std::string(integratorName(settings.integrator)).c_str(),
-        double(record.solverIterations) / double(steps), record.maxVolumeError,
+        double(record.solverIterations) / double(steps),
+        double(record.solverPhases) / double(steps), record.maxVolumeError,
         simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size(),
         simulator.initialOverlaps().close.size(), simulator.fittedPairs().size(),
         double(record.failsafePasses) / double(steps),

@@ -53,9 +53,11 @@ class ChunkPhases {
 
   /// Runs pass(chunk) for chunk 0..chunks-1 of a phase, then between(), until between() returns
   /// false, at most kMaxPhases times. pass() and between() must not start TBB work of their own.
+  /// Returns how many phases ran: each but the last ends in a barrier, the last in the region's
+  /// join.
   template <class Pass, class Between>
-  void run(std::size_t chunks, const Pass& pass, const Between& between) {
-    if (chunks == 0) return;
+  std::uint64_t run(std::size_t chunks, const Pass& pass, const Between& between) {
+    if (chunks == 0) return 0;
     if (chunks > kMaxChunks)
       throw Error(cat(chunks, " chunks exceed the ", kMaxChunks, " a phase can count"));
     joined_.store(0, std::memory_order_relaxed);
@@ -79,8 +81,11 @@ class ChunkPhases {
     };
     const std::size_t threads =
         std::min<std::size_t>(chunks, std::size_t(tbb::this_task_arena::max_concurrency()));
-    if (threads <= 1) return work();
-    tbb::parallel_for(std::size_t(0), threads, [&](std::size_t) { work(); });
+    if (threads <= 1)
+      work();
+    else
+      tbb::parallel_for(std::size_t(0), threads, [&](std::size_t) { work(); });
+    return stopAt_.load(std::memory_order_relaxed);
   }
 
  private:

@@ -1,7 +1,5 @@
 #include "core/dynamics/contact_springs.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 
@@ -23,7 +21,6 @@ void ContactSprings::set(std::span<const ContactStencil> stencils, const Scalar*
   approach_.assign(3 * count, 0);
   coefficient_.assign(3 * count, 0);
   rhsScale_.assign(3 * count, 0);
-  scale_.assign(3 * count, 0);
   activeCount_ = 0;
   sortScratch_.clear();
   for (std::size_t s = 0; s < count; ++s) {
@@ -107,8 +104,16 @@ void ContactSprings::begin(const Vec3* x0, const Vec3* v0, const Vec3& gravity, 
   }
 }
 
-void ContactSprings::applyRows(Vec3* rhs, Mat3* inverseDiagonal) const {
-  tbb::parallel_for(std::size_t(0), touched_.size(), [&](std::size_t row) {
+std::span<const Index> ContactSprings::touchedIn(std::size_t begin, std::size_t end) const {
+  const auto first = std::lower_bound(touched_.begin(), touched_.end(), Index(begin));
+  const auto last = std::lower_bound(first, touched_.end(), Index(end));
+  return {first, last};
+}
+
+void ContactSprings::applyRows(Vec3* rhs, Mat3* inverseDiagonal, std::size_t begin,
+                               std::size_t end) const {
+  for (const Index& i : touchedIn(begin, end)) {
+    const std::size_t row = std::size_t(&i - touched_.data());
     Mat3 diagonal = baseDiagonal_[row];
     Vec3 b = baseRhs_[row];
     for (Index e = incidenceStart_[row]; e < incidenceStart_[row + 1]; ++e) {
@@ -121,44 +126,32 @@ void ContactSprings::applyRows(Vec3* rhs, Mat3* inverseDiagonal) const {
         b -= (rhsScale_[3 * s + d] * w) * direction;
       }
     }
-    const Index i = touched_[row];
     rhs[i] = b;
     inverseDiagonal[i] = diagonal.inverse();
-  });
-}
-
-double ContactSprings::dots(const Vec3* x, std::size_t chunk, std::size_t chunks) {
-  const std::size_t count = stencils_.size();
-  const std::size_t begin = count * chunk / chunks, end = count * (chunk + 1) / chunks;
-  double curvature = 0;
-  for (std::size_t s = begin; s < end; ++s) {
-    if (!active_[s]) {
-      std::fill(&scale_[3 * s], &scale_[3 * s] + 3, Scalar(0));
-      continue;
-    }
-    const Vec3 sum = weightedSum(stencils_[s], x);
-    for (std::size_t d = 3 * s; d < 3 * s + 3; ++d) {
-      const Scalar along = direction_[d].dot(sum);
-      scale_[d] = coefficient_[d] * along;
-      curvature += double(scale_[d]) * along;
-    }
   }
-  return curvature;
 }
 
-void ContactSprings::gather(Vec3* out, std::size_t begin, std::size_t end) const {
-  const auto first = std::lower_bound(touched_.begin(), touched_.end(), Index(begin));
-  const auto last = std::lower_bound(first, touched_.end(), Index(end));
-  for (auto it = first; it != last; ++it) {
-    const std::size_t row = std::size_t(it - touched_.begin());
+double ContactSprings::multiply(const Vec3* x, Vec3* out, std::size_t begin,
+                                std::size_t end) const {
+  // Each particle computes the g·x of its own stencils, so a stencil's is computed once per
+  // corner, up to four times: a few hundred stencils against thousands of particles, where a
+  // pass of its own over the stencils first cost every CG iteration a barrier more.
+  double curvature = 0;
+  for (const Index& i : touchedIn(begin, end)) {
+    const std::size_t row = std::size_t(&i - touched_.data());
     Vec3 sum = Vec3::Zero();
     for (Index e = incidenceStart_[row]; e < incidenceStart_[row + 1]; ++e) {
       const auto [s, corner] = incidence_[e];
+      if (!active_[s]) continue;
+      const Vec3 along = weightedSum(stencils_[s], x);
       const Scalar w = stencils_[s].weight[corner];
-      for (std::size_t d = 3 * s; d < 3 * s + 3; ++d) sum += (scale_[d] * w) * direction_[d];
+      for (std::size_t d = 3 * s; d < 3 * s + 3; ++d)
+        sum += (coefficient_[d] * direction_[d].dot(along) * w) * direction_[d];
     }
-    out[*it] += sum;
+    out[i] += sum;
+    curvature += double(x[i].dot(sum));
   }
+  return curvature;
 }
 
 std::size_t ContactSprings::update(const Vec3* v0, const Vec3* deltaV, Scalar h, Scalar tolerance) {

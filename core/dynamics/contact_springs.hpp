@@ -32,10 +32,10 @@
 /// Applied after the solve, friction could only stop the contact's own particles, which the rest of
 /// the body dragged on: a block on a 20° slope slid at friction 4.
 ///
-/// Products stay deterministic: the stencils' dots are computed in parallel over fixed ranges of
-/// stencils, then each particle gathers its stencils' terms in stencil order through an incidence
-/// list sorted by particle, so the result is the same for any thread count. Buffers keep their
-/// capacity: a step allocates nothing once the contacts have settled.
+/// Products stay deterministic: each particle computes its stencils' terms, dots included, in
+/// stencil order through an incidence list sorted by particle, so the result is the same for any
+/// thread count, and a product is one pass over particles with no barrier of its own. Buffers keep
+/// their capacity: a step allocates nothing once the contacts have settled.
 
 #include <cstddef>
 #include <span>
@@ -81,14 +81,13 @@ class ContactSprings {
   /// without contacts, kept by the assembly.
   void keepBaseDiagonal(std::size_t row, const Mat3& diagonal) { baseDiagonal_[row] = diagonal; }
   void keepBaseRhs(std::size_t row, const Vec3& rhs) { baseRhs_[row] = rhs; }
-  /// The touched particles' right-hand side and inverse diagonal block with the active springs.
-  void applyRows(Vec3* rhs, Mat3* inverseDiagonal) const;
-
-  /// The product's first half for stencils [k·size/chunks, (k+1)·size/chunks): each active
-  /// spring's c·(g·x). Returns Σ c·(g·x)², its share of xᵀ·A·x.
-  double dots(const Vec3* x, std::size_t chunk, std::size_t chunks);
-  /// The second half: out_i += Σ c·(g·x)·g_i over the touched particles in [begin, end).
-  void gather(Vec3* out, std::size_t begin, std::size_t end) const;
+  /// The right-hand side and inverse diagonal block, with the active springs, of the touched
+  /// particles in [begin, end).
+  void applyRows(Vec3* rhs, Mat3* inverseDiagonal, std::size_t begin, std::size_t end) const;
+  /// The springs' part of the product over the touched particles in [begin, end):
+  /// out_i += Σ c·(g·x)·g_i. Returns Σ x_i·(what it added), their share of xᵀ·A·x. Reads x of
+  /// any particle, writes out only in the range: one pass of a parallel loop over particles.
+  double multiply(const Vec3* x, Vec3* out, std::size_t begin, std::size_t end) const;
 
   /// After a solve that gave `deltaV`: lets go of springs that pull, takes in stencils that end
   /// within the gap, raises the force of springs that end more than `tolerance` inside it (an
@@ -103,6 +102,8 @@ class ContactSprings {
                   std::vector<char>& held) const;
 
  private:
+  /// The touched particles in [begin, end), a run of touched().
+  std::span<const Index> touchedIn(std::size_t begin, std::size_t end) const;
   /// Σ w_k·x_k over a stencil's corners that are particles.
   Vec3 weightedSum(const ContactStencil& stencil, const Vec3* x) const;
   /// Stencil s's three rows' coefficients and right-hand-side scales from its state.
@@ -123,10 +124,9 @@ class ContactSprings {
   std::vector<Scalar> tangentCoefficient_;
   /// Three rows per stencil, along its normal and two tangents: the direction, g·v₀ along it, the
   /// matrix coefficient (the spring's c along the normal, the friction damping along the
-  /// tangents; 0 where inactive), the right-hand side's scale, and the
-  /// latest dots' c·(g·x).
+  /// tangents; 0 where inactive) and the right-hand side's scale.
   std::vector<Vec3> direction_;
-  std::vector<Scalar> approach_, coefficient_, rhsScale_, scale_;
+  std::vector<Scalar> approach_, coefficient_, rhsScale_;
   std::vector<Index> rowOf_;  ///< per particle
   std::vector<Index> touched_;
   /// Per touched particle its incidences, (stencil, corner), in stencil order.

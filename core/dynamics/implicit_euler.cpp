@@ -285,29 +285,20 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   // filtered, and the filtered-out normal part of the residual is kept as the surface's impulse.
   //
   // The passes run as the phases of one parallel region (chunk_phases.hpp): the warm start's
-  // product, the first residual, its norm, then per iteration the product of the direction, the
-  // update of Δv and the residual, and the next direction. Each between() reads the chunk sums in
-  // chunk order and picks the next pass.
+  // product, the first residual with its norm, then per iteration the product of the direction,
+  // the update of Δv and the residual, and the next direction. Each between() reads the chunk sums
+  // in chunk order and picks the next pass.
   const std::size_t n = topology.particleCount();
   const Scalar* inverseMass = topology.inverseMass.data();
   for (Index i : held_) deltaV_[i] = filtered(i, deltaV_[i]) + holdSpeed_[i] * holdNormal_[i];
-  // Contact springs: each product starts with their dots, a pass of its own, since a stencil's
-  // particles lie in any chunks.
-  if (!contacts_.empty()) contacts_.applyRows(rhs_.data(), inverseDiagonal_.data());
+  // Contact springs: their rows of the right-hand side and the preconditioner are set by the
+  // first pass, which the residual's pass follows; each product adds theirs, particle by particle.
+  const bool rows = !contacts_.empty();
   const bool contacts = contacts_.activeCount() > 0;
-  enum class Pass {
-    WarmContactDots,
-    WarmProduct,
-    Residual,
-    ResidualNorm,
-    ContactDots,
-    Product,
-    Update,
-    Direction
-  };
-  Pass pass = contacts ? Pass::WarmContactDots : Pass::WarmProduct;
+  enum class Pass { WarmProduct, Residual, Product, Update, Direction };
+  Pass pass = Pass::WarmProduct;
   const std::size_t chunks = chunkSum_.size();
-  double rz = 0, rhsNorm = 0, tolerance = 0, contactCurvature = 0;
+  double rz = 0, rhsNorm = 0, tolerance = 0;
   Scalar alpha = 0, beta = 0;
   int iteration = 0;
   bool zeroRhs = false;
@@ -315,14 +306,12 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   stats_ = {};
   const auto runPass = [&](std::size_t chunk) {
     const std::size_t begin = chunk * kChunk, end = std::min(n, (chunk + 1) * kChunk);
-    double first = 0, second = 0;
+    double first = 0, second = 0, third = 0;
     switch (pass) {
-      case Pass::WarmContactDots:
-        first = contacts_.dots(deltaV_.data(), chunk, chunks);
-        break;
       case Pass::WarmProduct:
+        if (rows) contacts_.applyRows(rhs_.data(), inverseDiagonal_.data(), begin, end);
         matrix_.multiply(deltaV_.data(), product_.data(), inverseMass, begin, end);
-        if (contacts) contacts_.gather(product_.data(), begin, end);
+        if (contacts) contacts_.multiply(deltaV_.data(), product_.data(), begin, end);
         if (volume) sumVolumeDots(deltaV_.data(), chunk);
         break;
       case Pass::Residual:
@@ -334,20 +323,15 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
           preconditioned_[i] = filtered(Index(i), inverseDiagonal_[i] * residual_[i]);
           direction_[i] = preconditioned_[i];
           first += dot(residual_[i], preconditioned_[i]);
+          third += dot(residual_[i], residual_[i]);
           if (inverseMass[i] == 0) continue;
           const Vec3 load = filtered(Index(i), rhs_[i] - topology.mass[i] * gravityImpulse_);
           second += dot(load, load);
         }
         break;
-      case Pass::ResidualNorm:
-        for (std::size_t i = begin; i < end; ++i) first += dot(residual_[i], residual_[i]);
-        break;
-      case Pass::ContactDots:
-        first = contacts_.dots(direction_.data(), chunk, chunks);
-        break;
       case Pass::Product:
         first = matrix_.multiply(direction_.data(), product_.data(), inverseMass, begin, end);
-        if (contacts) contacts_.gather(product_.data(), begin, end);
+        if (contacts) first += contacts_.multiply(direction_.data(), product_.data(), begin, end);
         if (volume) sumVolumeDots(direction_.data(), chunk);
         break;
       case Pass::Update: {
@@ -380,62 +364,50 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
         break;
       }
     }
-    chunkSum_[chunk] = {first, second};
+    chunkSum_[chunk] = {first, second, third};
   };
   const auto between = [&] {
-    std::pair<double, double> total{0, 0};
-    for (const auto& [first, second] : chunkSum_) {
-      total.first += first;
-      total.second += second;
-    }
+    std::array<double, 3> total{0, 0, 0};
+    for (const std::array<double, 3>& sum : chunkSum_)
+      for (int k = 0; k < 3; ++k) total[k] += sum[k];
     switch (pass) {
-      case Pass::WarmContactDots:
-        pass = Pass::WarmProduct;
-        return true;
       case Pass::WarmProduct:
         if (volume) finishVolumeDots();
         pass = Pass::Residual;
         return true;
       case Pass::Residual:
-        rz = total.first;
-        rhsNorm = std::max(std::sqrt(total.second),
+        rz = total[0];
+        rhsNorm = std::max(std::sqrt(total[1]),
                            kGravityShare * double(gravityImpulse_.norm()) * massNorm_);
         zeroRhs = rhsNorm == 0;
+        if (zeroRhs) return false;
         tolerance = kTolerance * rhsNorm;
-        pass = Pass::ResidualNorm;
-        return !zeroRhs;
-      case Pass::ResidualNorm:
-        stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
+        stats_.relativeResidual = std::sqrt(total[2]) / rhsNorm;
         iteration = 1;
-        pass = contacts ? Pass::ContactDots : Pass::Product;
-        return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
-      case Pass::ContactDots:
-        contactCurvature = total.first;
         pass = Pass::Product;
-        return true;
+        return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
       case Pass::Product: {
-        const double curvature =
-            (volume ? total.first + finishVolumeDots() : total.first) + contactCurvature;
+        const double curvature = volume ? total[0] + finishVolumeDots() : total[0];
         alpha = Scalar(rz / curvature);
         pass = Pass::Update;
         return curvature > 0;  // else converged to rounding, or a degenerate direction
       }
       case Pass::Update: {
         stats_.iterations = iteration;
-        stats_.relativeResidual = std::sqrt(total.first) / rhsNorm;
-        if (std::sqrt(total.first) <= tolerance) return false;
-        beta = Scalar(total.second / rz);
-        rz = total.second;
+        stats_.relativeResidual = std::sqrt(total[0]) / rhsNorm;
+        if (std::sqrt(total[0]) <= tolerance) return false;
+        beta = Scalar(total[1] / rz);
+        rz = total[1];
         pass = Pass::Direction;
         return true;
       }
       case Pass::Direction:
-        pass = contacts ? Pass::ContactDots : Pass::Product;
+        pass = Pass::Product;
         return ++iteration <= kMaxIterations;
     }
     return false;
   };
-  phases_.run(chunks, runPass, between);
+  stepPhases_ += phases_.run(chunks, runPass, between);
   if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
@@ -453,6 +425,7 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
     warmStarted_ = true;
   }
   stepIterations_ = 0;
+  stepPhases_ = 0;
   return stepAgain(topology, dt, state, substepStart);
 }
 
@@ -472,6 +445,7 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
     stepIterations_ += stats_.iterations;
   }
   stats_.stepIterations = stepIterations_;
+  stats_.stepPhases = stepPhases_;
   stats_.contacts = contacts_.activeCount();
   restoreMomentum(topology);
   // Coulomb friction at held particles, from the surface's impulse on each. Kept apart from Δv,

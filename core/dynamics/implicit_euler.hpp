@@ -54,6 +54,8 @@
 /// order, so the result is the same for any thread count. All buffers are sized at construction:
 /// a step allocates nothing.
 
+#include <array>
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -75,6 +77,10 @@ struct ImplicitSolveStats {
   /// Those of every solve of the latest step: a step taken again for particles that met a plane
   /// (stepAgain) solves twice.
   int stepIterations = 0;
+  /// The phases of the latest step's solves, each a barrier every thread waits at
+  /// (chunk_phases.hpp): what limits the gain from more cores, with the step's other parallel
+  /// loops.
+  std::uint64_t stepPhases = 0;
   double relativeResidual = 0;  ///< |r| / |b − M·h·g| at the end (kGravityShare floors the latter)
   std::size_t contacts = 0;     ///< contact springs active at the end of the latest step
 };
@@ -173,9 +179,9 @@ class ImplicitEuler {
   /// deltaV_ and direction_, the product's inputs, have matrix_.paddedSize() entries; those past
   /// the particles are always 0.
   std::vector<Vec3> deltaV_, residual_, preconditioned_, direction_, product_;
-  bool warmStarted_ = false;  ///< deltaV_ holds a step's Δv, or a checkpoint's
-  std::vector<std::pair<double, double>> chunkSum_;
-  ChunkPhases phases_;  ///< the solve's passes, in one parallel region
+  bool warmStarted_ = false;                     ///< deltaV_ holds a step's Δv, or a checkpoint's
+  std::vector<std::array<double, 3>> chunkSum_;  ///< a pass's sums per chunk
+  ChunkPhases phases_;                           ///< the solve's passes, in one parallel region
   ContactSprings contacts_;
   /// Holds of the next step, per particle: the unit normal (zero when not held), the velocity
   /// along it, the friction coefficient; then the normal part of the residual during the solve.
@@ -210,7 +216,8 @@ class ImplicitEuler {
   std::vector<Vec3> triangleGradient_, volumeGradient_;
   std::vector<double> runDot_, volumeCoefficient_;
   std::vector<Scalar> volumeScale_;
-  int stepIterations_ = 0;  ///< CG iterations of the latest step's solves
+  int stepIterations_ = 0;        ///< CG iterations of the latest step's solves
+  std::uint64_t stepPhases_ = 0;  ///< and their phases
   ImplicitSolveStats stats_;
 };
 

@@ -117,12 +117,10 @@ TEST(ContactSprings, ProductDiagonalAndRightHandSideMatchADenseReference) {
   for (std::size_t i = 0; i < kParticles; ++i) xd.segment<3>(3 * i) = x[i].cast<double>();
   const Eigen::VectorXd expected = a * xd;
 
-  // The product as the solver runs it: the dots over three chunks, then the gather over two.
-  double curvature = 0;
-  for (std::size_t chunk = 0; chunk < 3; ++chunk) curvature += contacts.dots(x.data(), chunk, 3);
+  // The product as the solver runs it: over chunks of particles, here two, which split stencils.
   std::vector<Vec3> out(kParticles, Vec3::Zero());
-  contacts.gather(out.data(), 0, 17);
-  contacts.gather(out.data(), 17, kParticles);
+  const double curvature = contacts.multiply(x.data(), out.data(), 0, 17) +
+                           contacts.multiply(x.data(), out.data(), 17, kParticles);
   for (std::size_t i = 0; i < kParticles; ++i)
     for (int d = 0; d < 3; ++d)
       EXPECT_NEAR(out[i][d], expected[3 * i + d], 1e-3 * (1 + std::abs(expected[3 * i + d])))
@@ -138,7 +136,8 @@ TEST(ContactSprings, ProductDiagonalAndRightHandSideMatchADenseReference) {
     contacts.keepBaseDiagonal(row, Mat3::Identity() * Scalar(2));
     contacts.keepBaseRhs(row, Vec3(1, 2, 3));
   }
-  contacts.applyRows(rhs.data(), inverseDiagonal.data());
+  contacts.applyRows(rhs.data(), inverseDiagonal.data(), 0, 17);
+  contacts.applyRows(rhs.data(), inverseDiagonal.data(), 17, kParticles);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(3 * kParticles);
   for (std::size_t s = 0; s < springs.stencils.size(); ++s) {
     if (!active[s]) continue;
