@@ -182,28 +182,22 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
                                                    const CollisionGeometry& geometry,
                                                    CollisionDetector& detector,
                                                    const SimulationState& state, Scalar dt) {
-  const std::size_t particles = topology.particleCount();
   const Vec3 fall = dt * dt * topology.settings.gravity;
   const std::span<const Vec3> start = state.position;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particles, kParticleGrain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const Vec3& x = start[i];
-                        predicted_[i] = topology.inverseMass[i] == 0
-                                            ? x
-                                            : Vec3(x + dt * state.velocity[i] + fall);
-                      }
-                    });
   // The reach: half of how far each particle's predicted travel departs from its body's mean
   // travel, what the solve may change. A body moving as one (falling, flying) reaches no further
   // than its swept boxes: grown by the whole travel, the boxes of 300 beads falling together in
-  // one body overlapped by the hundred million pairs.
+  // one body overlapped by the hundred million pairs. One pass per body, the prediction included:
+  // each parallel loop is a barrier of the step.
   tbb::parallel_for(std::size_t(0), topology.bodies.size(), [&](std::size_t b) {
     const Body& body = topology.bodies[b];
     const Index end = body.firstParticle + body.particleCount;
     Vec3d sum = Vec3d::Zero();
-    for (Index i = body.firstParticle; i < end; ++i)
-      sum += (predicted_[i] - start[i]).cast<double>();
+    for (Index i = body.firstParticle; i < end; ++i) {
+      const Vec3& x = start[i];
+      predicted_[i] = topology.inverseMass[i] == 0 ? x : Vec3(x + dt * state.velocity[i] + fall);
+      sum += (predicted_[i] - x).cast<double>();
+    }
     const Vec3 mean =
         body.particleCount ? Vec3((sum / double(body.particleCount)).cast<Scalar>()) : Vec3::Zero();
     for (Index i = body.firstParticle; i < end; ++i) {

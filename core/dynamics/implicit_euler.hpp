@@ -191,6 +191,9 @@ class ImplicitEuler {
   std::vector<Index> held_;               ///< particles with a hold, reserved for all of them
   std::vector<char> isHeld_;              ///< per particle: it has a hold
   std::vector<char> bodyHeld_;            ///< per body: some particle was held this step
+  /// Per body: whether restoreMomentum() corrects its Δv, and by what, for the step's last pass.
+  std::vector<char> bodyCorrected_;
+  std::vector<Vec3> bodyCorrection_;
   /// restoreMomentum()'s: per body whether it is free and its group (bodies joined by contact
   /// springs, by their lowest body); per group whether it is held, its excess and its mass; per
   /// free body its excess and mass.
