@@ -99,26 +99,32 @@ void updateCollisionBoxes(const SceneTopology& topology, const CollisionGeometry
   const Vec3* x = motion.end.data();
   const Vec3* x0 = motion.start.data();
   Box3* particleBox = particleBoxes.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleBoxes.size(), kTriangleGrain),
-                    [=](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        Box3 box(x[i]);
-                        box.extend(x0[i]);
-                        particleBox[i] = inflated(box, margin);
-                      }
-                    });
+  const auto pathBox = [=](Index i) {
+    Box3 box(x[i]);
+    box.extend(x0[i]);
+    return inflated(box, margin);
+  };
+  // The particles' boxes and the triangles' in one parallel loop, each triangle's box made again
+  // from its corners' paths rather than read from the particles' boxes: a loop of its own after
+  // theirs cost the step a barrier, at every call. The same operations give the same boxes.
+  const std::size_t particles = particleBoxes.size();
   const Triangle* triangles = topology.triangles.data();
   Box3* out = boxes.data();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, geometry.softTriangleCount, kTriangleGrain),
-                    [=](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                        const Triangle& corners = triangles[t];
-                        Box3 box = particleBox[corners[0]];
-                        box.extend(particleBox[corners[1]]);
-                        box.extend(particleBox[corners[2]]);
-                        out[t] = box;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, particles + geometry.softTriangleCount, kTriangleGrain),
+      [=](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          if (k < particles) {
+            particleBox[k] = pathBox(Index(k));
+            continue;
+          }
+          const Triangle& corners = triangles[k - particles];
+          Box3 box = pathBox(corners[0]);
+          box.extend(pathBox(corners[1]));
+          box.extend(pathBox(corners[2]));
+          out[k - particles] = box;
+        }
+      });
 }
 
 }  // namespace softbake
