@@ -70,30 +70,74 @@ BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
   return grown;
 }
 
-bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
+bool PairCache::markTurned(const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
   if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size() ||
       flatSeen_.size() != input.patchFlat.size())
     return false;
-  bool anyTurned = false;
+  anyTurned_ = false;
   turned_.resize(flatSeen_.size());
   for (std::size_t p = 0; p < turned_.size(); ++p) {
     turned_[p] = std::uint8_t(flatSeen_[p] != input.patchFlat[p]);
-    anyTurned = anyTurned || turned_[p];
+    anyTurned_ = anyTurned_ || turned_[p];
   }
-  const auto turned = [&](std::size_t t) {
-    const Index patch = input.trianglePatch[t];
-    return patch < turned_.size() && turned_[patch];
-  };
-  // The triangles that left, gathered in parallel chunks and joined in chunk order: ascending.
-  const std::size_t chunks = std::min(kMostChunks, (count + kBoxGrain - 1) / kBoxGrain);
-  leftChunks_.reset(chunks);
-  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    std::vector<Index>& out = leftChunks_[chunk];
-    for (std::size_t t = count * chunk / chunks; t < count * (chunk + 1) / chunks; ++t)
-      if (!grown_[t].contains(input.triangleBox[t]) || (anyTurned && turned(t)))
-        out.push_back(Index(t));
-  });
+  return true;
+}
+
+std::size_t PairCache::scanChunks(std::size_t count) {
+  return std::min(kMostChunks, (count + kBoxGrain - 1) / kBoxGrain);
+}
+
+void PairCache::scanChunk(const BroadPhaseInput& input, std::size_t chunk, std::size_t chunks) {
+  const std::size_t count = input.triangleBox.size();
+  std::vector<Index>& out = leftChunks_[chunk];
+  for (std::size_t t = count * chunk / chunks; t < count * (chunk + 1) / chunks; ++t) {
+    // Without patches turned, trianglePatch is not read: an input may have none.
+    const auto turned = [&] {
+      const Index patch = input.trianglePatch[t];
+      return patch < turned_.size() && turned_[patch];
+    };
+    if (!grown_[t].contains(input.triangleBox[t]) || (anyTurned_ && turned()))
+      out.push_back(Index(t));
+  }
+}
+
+std::size_t PairCache::filterChunks() const {
+  return std::min(kMostChunks, (cached_.size() + kFilterGrain - 1) / kFilterGrain);
+}
+
+void PairCache::filterChunk(const BroadPhaseInput& input, std::span<const std::uint8_t> involving,
+                            std::size_t chunk, std::size_t chunks) {
+  // Without branches: a quarter of the cached pairs overlap, in no pattern a branch predictor
+  // learns, so each pair is written and kept or overwritten by the next.
+  const Box3* box = input.triangleBox.data();
+  std::vector<TrianglePair>& out = buffers_[chunk];
+  const std::size_t begin = cached_.size() * chunk / chunks;
+  const std::size_t end = cached_.size() * (chunk + 1) / chunks;
+  out.resize(end - begin);
+  std::size_t kept = 0;
+  if (involving.empty()) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const TrianglePair pair = cached_[i];
+      out[kept] = pair;
+      kept += unsigned(overlaps(box[pair.first], box[pair.second]));
+    }
+  } else {
+    // Few triangles are flagged: their flags, a byte each, are read first and stay in cache.
+    for (std::size_t i = begin; i < end; ++i) {
+      const TrianglePair pair = cached_[i];
+      if (!(involving[pair.first] | involving[pair.second])) continue;
+      out[kept] = pair;
+      kept += unsigned(overlaps(box[pair.first], box[pair.second]));
+    }
+  }
+  out.resize(kept);
+}
+
+bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
+  const std::size_t count = input.triangleBox.size();
+  // The triangles that left, found in chunks by filterIfStill() and joined in chunk order:
+  // ascending.
   leftChunks_.join(left_);
   if (left_.empty()) return true;
   // Triangles found again one by one cost more than in a rebuild, which also recentres every
@@ -120,45 +164,41 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   return true;
 }
 
+PairCache::Still PairCache::filterIfStill(const BroadPhaseInput& input,
+                                          std::vector<TrianglePair>& pairs,
+                                          std::span<const std::uint8_t> involving) {
+  // Most substeps no box leaves its grown box: the scan for those that left and the filter of the
+  // cached pairs then run in one parallel loop, where one after the other cost a barrier more.
+  if (!markTurned(input)) return Still::NotMade;
+  const std::size_t scans = scanChunks(input.triangleBox.size()), filters = filterChunks();
+  leftChunks_.reset(scans);
+  buffers_.reset(filters);
+  tbb::parallel_for(std::size_t(0), std::max(scans, filters), [&](std::size_t chunk) {
+    if (chunk < scans) scanChunk(input, chunk, scans);
+    if (chunk < filters) filterChunk(input, involving, chunk, filters);
+  });
+  for (std::size_t chunk = 0; chunk < scans; ++chunk)
+    if (!leftChunks_[chunk].empty()) return Still::Left;
+  buffers_.join(pairs);
+  return Still::Filtered;
+}
+
 void PairCache::findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                           std::vector<TrianglePair>& pairs,
                           std::span<const std::uint8_t> involving) {
-  if (!update(broadPhase, input)) rebuild(broadPhase, input);
+  const Still still = filterIfStill(input, pairs, involving);
+  if (still == Still::Filtered) return;
+  if (still == Still::NotMade || !update(broadPhase, input)) rebuild(broadPhase, input);
   filter(input, pairs, involving);
 }
 
 void PairCache::filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
                        std::span<const std::uint8_t> involving) {
   // Filtered in parallel chunks, concatenated in chunk order: the cached order, sorted, is kept.
-  // Without branches: a quarter of the cached pairs overlap, in no pattern a branch predictor
-  // learns, so each pair is written and kept or overwritten by the next.
-  const std::size_t chunks =
-      std::min(kMostChunks, (cached_.size() + kFilterGrain - 1) / kFilterGrain);
+  const std::size_t chunks = filterChunks();
   buffers_.reset(chunks);
-  const Box3* box = input.triangleBox.data();
-  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    std::vector<TrianglePair>& out = buffers_[chunk];
-    const std::size_t begin = cached_.size() * chunk / chunks;
-    const std::size_t end = cached_.size() * (chunk + 1) / chunks;
-    out.resize(end - begin);
-    std::size_t kept = 0;
-    if (involving.empty()) {
-      for (std::size_t i = begin; i < end; ++i) {
-        const TrianglePair pair = cached_[i];
-        out[kept] = pair;
-        kept += unsigned(overlaps(box[pair.first], box[pair.second]));
-      }
-    } else {
-      // Few triangles are flagged: their flags, a byte each, are read first and stay in cache.
-      for (std::size_t i = begin; i < end; ++i) {
-        const TrianglePair pair = cached_[i];
-        if (!(involving[pair.first] | involving[pair.second])) continue;
-        out[kept] = pair;
-        kept += unsigned(overlaps(box[pair.first], box[pair.second]));
-      }
-    }
-    out.resize(kept);
-  });
+  tbb::parallel_for(std::size_t(0), chunks,
+                    [&](std::size_t chunk) { filterChunk(input, involving, chunk, chunks); });
   buffers_.join(pairs);
 }
 

@@ -65,8 +65,25 @@ class PairCache {
   std::size_t exactCount(const BroadPhaseInput& input) const;
   /// The cache made valid for `input` by finding again only the pairs of the triangles that left
   /// their grown boxes, or whose patch turned flat or stopped being flat (pairEligible changed for
-  /// the pairs within it); false where it must be rebuilt whole.
+  /// the pairs within it), as filterIfStill() found them; false where it must be rebuilt whole.
   bool update(BroadPhase& broadPhase, const BroadPhaseInput& input);
+  enum class Still {
+    Filtered,  ///< no box left its grown box: `pairs` is filter()'s
+    Left,      ///< some did: leftChunks_ holds them for update()
+    NotMade,   ///< the cache was not made for these triangles: rebuild()
+  };
+  /// The scan for triangles that left their grown boxes and filter() in one parallel loop.
+  Still filterIfStill(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
+                      std::span<const std::uint8_t> involving);
+  /// Whether the cache was made for `input`'s triangles and surfaces; sets turned_ if so.
+  bool markTurned(const BroadPhaseInput& input);
+  static std::size_t scanChunks(std::size_t triangles);
+  /// Chunk `chunk` of `chunks` of the scan for triangles that left, into leftChunks_.
+  void scanChunk(const BroadPhaseInput& input, std::size_t chunk, std::size_t chunks);
+  std::size_t filterChunks() const;
+  /// Chunk `chunk` of `chunks` of filter(), into buffers_.
+  void filterChunk(const BroadPhaseInput& input, std::span<const std::uint8_t> involving,
+                   std::size_t chunk, std::size_t chunks);
   /// `box` grown by the margin on every side.
   Box3 grow(const Box3& box) const;
   BroadPhaseInput grownInput(const BroadPhaseInput& input) const;
@@ -81,6 +98,7 @@ class PairCache {
   std::vector<char> hasLeft_;           ///< per triangle
   std::vector<std::uint8_t> flatSeen_;  ///< the patches' flatness the cached pairs were found with
   std::vector<std::uint8_t> turned_;    ///< per patch: flat then and not now, or the other way
+  bool anyTurned_ = false;
   std::vector<TrianglePair> fresh_, merged_;
   std::size_t surfaceCount_ = 0;
   std::size_t rebuilds_ = 0, updates_ = 0;
