@@ -24,17 +24,19 @@
 #include <string>
 #include <utility>
 
+// tbb::detail::r1::execute_and_wait(d1::task&, d1::task_group_context&, d1::wait_context&,
+// d1::task_group_context&), mangled: the symbol this library defines and the one it looks up.
+#define SOFTBAKE_TBB_ENTRY                                                                   \
+  "_ZN3tbb6detail2r116execute_and_waitERNS0_2d14taskERNS2_18task_group_contextERNS2_12wait_" \
+  "contextES6_"
+
 namespace {
 
 using ExecuteAndWait = void (*)(void*, void*, void*, void*);
 
-constexpr const char* kEntry =
-    "_ZN3tbb6detail2r116execute_and_waitERNS0_2d14taskERNS2_18task_group_contextERNS2_12wait_"
-    "contextES6_";
-
 ExecuteAndWait real() {
   static const ExecuteAndWait entry = [] {
-    auto found = reinterpret_cast<ExecuteAndWait>(dlsym(RTLD_NEXT, kEntry));
+    auto found = reinterpret_cast<ExecuteAndWait>(dlsym(RTLD_NEXT, SOFTBAKE_TBB_ENTRY));
     if (!found) {
       std::fprintf(stderr, "tbb_regions: libtbb's execute_and_wait not found: %s\n", dlerror());
       std::abort();
@@ -72,9 +74,8 @@ Sites& sites() {
 
 }  // namespace
 
-extern "C" void countedExecuteAndWait(void* task, void* context, void* wait, void* outer) __asm__(
-    "_ZN3tbb6detail2r116execute_and_waitERNS0_2d14taskERNS2_18task_group_contextERNS2_12wait_"
-    "contextES6_");
+extern "C" void countedExecuteAndWait(void* task, void* context, void* wait,
+                                      void* outer) __asm__(SOFTBAKE_TBB_ENTRY);
 
 extern "C" __attribute__((visibility("default"))) void countedExecuteAndWait(void* task,
                                                                              void* context,

@@ -104,16 +104,18 @@ void ContactSprings::begin(const Vec3* x0, const Vec3* v0, const Vec3& gravity, 
   }
 }
 
-std::span<const Index> ContactSprings::touchedIn(std::size_t begin, std::size_t end) const {
+std::pair<std::size_t, std::size_t> ContactSprings::rowsIn(std::size_t begin,
+                                                           std::size_t end) const {
   const auto first = std::lower_bound(touched_.begin(), touched_.end(), Index(begin));
   const auto last = std::lower_bound(first, touched_.end(), Index(end));
-  return {first, last};
+  return {std::size_t(first - touched_.begin()), std::size_t(last - touched_.begin())};
 }
 
 void ContactSprings::applyRows(Vec3* rhs, Mat3* inverseDiagonal, std::size_t begin,
                                std::size_t end) const {
-  for (const Index& i : touchedIn(begin, end)) {
-    const std::size_t row = std::size_t(&i - touched_.data());
+  const auto [first, last] = rowsIn(begin, end);
+  for (std::size_t row = first; row < last; ++row) {
+    const Index i = touched_[row];
     Mat3 diagonal = baseDiagonal_[row];
     Vec3 b = baseRhs_[row];
     for (Index e = incidenceStart_[row]; e < incidenceStart_[row + 1]; ++e) {
@@ -137,8 +139,9 @@ double ContactSprings::multiply(const Vec3* x, Vec3* out, std::size_t begin,
   // corner, up to four times: a few hundred stencils against thousands of particles, where a
   // pass of its own over the stencils first cost every CG iteration a barrier more.
   double curvature = 0;
-  for (const Index& i : touchedIn(begin, end)) {
-    const std::size_t row = std::size_t(&i - touched_.data());
+  const auto [first, last] = rowsIn(begin, end);
+  for (std::size_t row = first; row < last; ++row) {
+    const Index i = touched_[row];
     Vec3 sum = Vec3::Zero();
     for (Index e = incidenceStart_[row]; e < incidenceStart_[row + 1]; ++e) {
       const auto [s, corner] = incidence_[e];

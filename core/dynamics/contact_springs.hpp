@@ -39,6 +39,7 @@
 
 #include <cstddef>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -102,8 +103,8 @@ class ContactSprings {
                   std::vector<char>& held) const;
 
  private:
-  /// The touched particles in [begin, end), a run of touched().
-  std::span<const Index> touchedIn(std::size_t begin, std::size_t end) const;
+  /// The rows [first, last) of touched() whose particles lie in [begin, end).
+  std::pair<std::size_t, std::size_t> rowsIn(std::size_t begin, std::size_t end) const;
   /// Σ w_k·x_k over a stencil's corners that are particles.
   Vec3 weightedSum(const ContactStencil& stencil, const Vec3* x) const;
   /// Stencil s's three rows' coefficients and right-hand-side scales from its state.
