@@ -33,7 +33,12 @@ struct Scene {
   std::vector<Triangle> triangles;
   std::vector<Index> triangleSurface;
   std::vector<CollisionSurface> surfaces;
-  BroadPhaseInput input() const { return {boxes, triangles, triangleSurface, surfaces, {}, {}}; }
+  BroadPhaseInput input() const {
+    return {.triangleBox = boxes,
+            .triangleVertices = triangles,
+            .triangleSurface = triangleSurface,
+            .surfaces = surfaces};
+  }
 };
 
 /// Balls of radius 0.5 m in a row, 0.8 m apart, so neighbours overlap by 0.2 m; every vertex

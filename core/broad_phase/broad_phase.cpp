@@ -17,7 +17,7 @@ namespace softbake {
 bool pairEligible(const BroadPhaseInput& input, Index i, Index j) {
   const Index si = input.triangleSurface[i], sj = input.triangleSurface[j];
   if (si != sj) return input.surfaces[si].moving || input.surfaces[sj].moving;
-  if (!input.surfaces[si].selfCollision || input.inOneFlatPatch(i, j)) return false;
+  if (!input.surfaces[si].selfCollision || input.inFlatPatches(i, j)) return false;
   // Triangles sharing a vertex always touch at it: that contact is the mesh itself, not a
   // collision, so it never reaches the narrow phase.
   for (Index a : input.triangleVertices[i])

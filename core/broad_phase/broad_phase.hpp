@@ -8,7 +8,8 @@
 ///
 /// Eligibility (pairEligible): triangles of two different surfaces, unless both are static; two
 /// triangles of one surface only when that surface self-collides, they share no vertex and they
-/// do not lie in one patch that is flat this step (normal cones: core/collision/self_patches.hpp).
+/// do not lie in one patch, or two neighbouring ones, flat this step (normal cones:
+/// core/collision/self_patches.hpp).
 
 #include <cstddef>
 #include <cstdint>
@@ -50,14 +51,26 @@ struct BroadPhaseInput {
   std::span<const Index> triangleSurface;  ///< per triangle: its surface
   std::span<const CollisionSurface> surfaces;
   /// Normal-cone culling (core/collision/self_patches.hpp): per triangle its patch or kNoPatch,
-  /// and per patch whether it is flat this step. Empty: no pair is culled.
-  std::span<const Index> trianglePatch;
-  std::span<const std::uint8_t> patchFlat;
-  /// Whether i and j lie in one patch that is flat this step.
-  bool inOneFlatPatch(Index i, Index j) const {
-    if (patchFlat.empty()) return false;
-    const Index p = trianglePatch[i];
-    return p == trianglePatch[j] && p < patchFlat.size() && patchFlat[p];
+  /// per patch whether it is flat this step, and per patch its neighbouring patches (from
+  /// patchNeighbourStart[p], ascending), each with whether the two are flat as one this step.
+  /// Empty: no pair is culled.
+  std::span<const Index> trianglePatch = {};
+  std::span<const std::uint8_t> patchFlat = {};
+  std::span<const Index> patchNeighbourStart = {}, patchNeighbour = {};
+  std::span<const std::uint8_t> patchFlatWith = {};
+  /// Whether patches p and q (the same, or neighbours) are flat as one this step; false where
+  /// either is no patch (~0).
+  bool flatTogether(Index p, Index q) const {
+    if (p >= patchFlat.size() || q >= patchFlat.size()) return false;
+    if (p == q) return patchFlat[p];
+    if (patchFlatWith.empty() || !patchFlat[p] || !patchFlat[q]) return false;
+    for (Index k = patchNeighbourStart[p]; k < patchNeighbourStart[p + 1]; ++k)
+      if (patchNeighbour[k] >= q) return patchNeighbour[k] == q && patchFlatWith[k];
+    return false;
+  }
+  /// Whether triangles i and j lie in one patch, or two neighbouring ones, flat this step.
+  bool inFlatPatches(Index i, Index j) const {
+    return !patchFlat.empty() && flatTogether(trianglePatch[i], trianglePatch[j]);
   }
 };
 

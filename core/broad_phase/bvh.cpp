@@ -28,11 +28,6 @@ constexpr std::size_t kMaxChunks = 256;
 /// Triangles per chunk of findPairsInvolving, at least: each descends every tree it may meet.
 constexpr std::size_t kQueryGrain = 64;
 
-/// Whether `patch` is one flat this step: two subtrees within it have no pairs.
-bool flatPatch(const BroadPhaseInput& input, Index patch) {
-  return patch < input.patchFlat.size() && input.patchFlat[patch];
-}
-
 double area(const Box3& box) {
   if (box.isEmpty()) return 0;
   const Vec3d d = box.max().cast<double>() - box.min().cast<double>();
@@ -373,7 +368,8 @@ void BvhBroadPhase::visit(const BroadPhaseInput& input, const Task& task, std::v
   const Node& a = ta.nodes[task.nodeA];
   const Node& b = tb.nodes[task.nodeB];
 
-  if (task.treeA == task.treeB && a.patch == b.patch && flatPatch(input, a.patch)) return;
+  // Two subtrees each within one patch, the same or neighbours, flat as one: no pairs.
+  if (task.treeA == task.treeB && input.flatTogether(a.patch, b.patch)) return;
   if (task.treeA == task.treeB && task.nodeA == task.nodeB) {  // a subtree against itself
     if (a.leaf()) {
       for (Index i = a.start; i < a.start + a.count; ++i)

@@ -43,6 +43,7 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
     growAll();
   }
   flatSeen_.assign(input.patchFlat.begin(), input.patchFlat.end());
+  flatWithSeen_.assign(input.patchFlatWith.begin(), input.patchFlatWith.end());
   surfaceCount_ = input.surfaces.size();
   updatedSinceRebuild_ = 0;
   ++rebuilds_;
@@ -73,13 +74,19 @@ BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
 bool PairCache::markTurned(const BroadPhaseInput& input) {
   const std::size_t count = input.triangleBox.size();
   if (margin_ < 0 || grown_.size() != count || surfaceCount_ != input.surfaces.size() ||
-      flatSeen_.size() != input.patchFlat.size())
+      flatSeen_.size() != input.patchFlat.size() ||
+      flatWithSeen_.size() != input.patchFlatWith.size())
     return false;
   anyTurned_ = false;
   turned_.resize(flatSeen_.size());
   for (std::size_t p = 0; p < turned_.size(); ++p) {
-    turned_[p] = std::uint8_t(flatSeen_[p] != input.patchFlat[p]);
-    anyTurned_ = anyTurned_ || turned_[p];
+    bool turned = flatSeen_[p] != input.patchFlat[p];
+    // A pair of neighbours turned flat as one, or back: the entries of both patches agree.
+    if (!flatWithSeen_.empty())
+      for (Index k = input.patchNeighbourStart[p]; k < input.patchNeighbourStart[p + 1]; ++k)
+        turned = turned || flatWithSeen_[k] != input.patchFlatWith[k];
+    turned_[p] = std::uint8_t(turned);
+    anyTurned_ = anyTurned_ || turned;
   }
   return true;
 }
@@ -160,6 +167,7 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   std::merge(cached_.begin(), cached_.end(), fresh_.begin(), fresh_.end(), merged_.begin());
   cached_.swap(merged_);
   flatSeen_.assign(input.patchFlat.begin(), input.patchFlat.end());
+  flatWithSeen_.assign(input.patchFlatWith.begin(), input.patchFlatWith.end());
   ++updates_;
   return true;
 }

@@ -64,8 +64,9 @@ class PairCache {
   /// How many cached pairs overlap in `input`: what filter() would keep.
   std::size_t exactCount(const BroadPhaseInput& input) const;
   /// The cache made valid for `input` by finding again only the pairs of the triangles that left
-  /// their grown boxes, or whose patch turned flat or stopped being flat (pairEligible changed for
-  /// the pairs within it), as filterIfStill() found them; false where it must be rebuilt whole.
+  /// their grown boxes, or whose patch turned flat or stopped being flat, alone or with a
+  /// neighbour (pairEligible changed for the pairs within it or across to it), as filterIfStill()
+  /// found them; false where it must be rebuilt whole.
   bool update(BroadPhase& broadPhase, const BroadPhaseInput& input);
   enum class Still {
     Filtered,  ///< no box left its grown box: `pairs` is filter()'s
@@ -97,7 +98,10 @@ class PairCache {
   std::vector<Index> left_;             ///< all of them, ascending
   std::vector<char> hasLeft_;           ///< per triangle
   std::vector<std::uint8_t> flatSeen_;  ///< the patches' flatness the cached pairs were found with
-  std::vector<std::uint8_t> turned_;    ///< per patch: flat then and not now, or the other way
+  /// The same of each pair of neighbouring patches taken as one.
+  std::vector<std::uint8_t> flatWithSeen_;
+  /// Per patch: flat then and not now, or the other way, alone or with a neighbour.
+  std::vector<std::uint8_t> turned_;
   bool anyTurned_ = false;
   std::vector<TrianglePair> fresh_, merged_;
   std::size_t surfaceCount_ = 0;

@@ -183,9 +183,9 @@ void CollisionDetector::detect(const SceneTopology& topology, const CollisionGeo
   updateFlatPatches(geometry, motion.start, motion.end, patchFlat_);
   if (clock) clock->lap(Stage::Boxes);
   if (pairCache_)
-    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
+    pairCache_->findPairs(*broadPhase_, geometry.broadPhaseInput(boxes_, &patchFlat_), pairs_);
   else
-    broadPhase_->findPairs(geometry.broadPhaseInput(boxes_, patchFlat_), pairs_);
+    broadPhase_->findPairs(geometry.broadPhaseInput(boxes_, &patchFlat_), pairs_);
   dropLeftAlone(geometry, pairs_);
   if (clock) clock->lap(Stage::BroadPhase);
   findContacts(topology, geometry, motion);
@@ -226,7 +226,7 @@ void CollisionDetector::findContacts(const SceneTopology& topology,
   // candidates (that was a quarter of a contact-heavy step). The pairs are tested in parallel
   // chunks whose hits are joined in chunk order, and only the few particle hits are sorted, so
   // the result is the same for any thread count.
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, patchFlat_);
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &patchFlat_);
   const auto testsFrom = [&](Index from, Index p, Index against) {
     const Box3& target = boxes_[against];
     for (Index r = topology.triangleRowStart[p]; r < topology.triangleRowStart[p + 1]; ++r) {

@@ -98,9 +98,10 @@ class CollisionDetector {
   }
   /// This substep's box of every collision triangle.
   std::span<const Box3> triangleBoxes() const { return boxes_; }
-  /// Per self-collision patch, whether it was flat over this substep's motion (updateFlatPatches):
-  /// what the broad phase culled by, for stages that read its pairs.
-  std::span<const std::uint8_t> flatPatches() const { return patchFlat_; }
+  /// Which self-collision patches, alone and with their neighbours, were flat over this
+  /// substep's motion (updateFlatPatches): what the broad phase culled by, for stages that read
+  /// its pairs.
+  const PatchFlatness& flatPatches() const { return patchFlat_; }
 
  private:
   void findContacts(const SceneTopology& topology, const CollisionGeometry& geometry,
@@ -113,7 +114,7 @@ class CollisionDetector {
 
   std::vector<Box3> boxes_;  ///< per collision triangle: static ones fixed, soft ones per substep
   std::vector<Box3> particleBoxes_;  ///< per particle, over the substep: what boxes_ are made of
-  std::vector<std::uint8_t> patchFlat_;  ///< per self-collision patch: flat over this substep
+  PatchFlatness patchFlat_;          ///< the self-collision patches flat over this substep
   std::unique_ptr<BroadPhase> broadPhase_;
   std::optional<PairCache> pairCache_;  ///< unset: the broad phase runs every step
   std::vector<TrianglePair> pairs_;

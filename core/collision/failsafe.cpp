@@ -210,7 +210,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
     }
     involving = triangleMoved_;
   }
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, detector.flatPatches());
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &detector.flatPatches());
   if (!detector.findCachedPairs(input, pairs_, involving))
     pairCache_.findPairs(*broadPhase_, input, pairs_, involving);
   detector.dropIgnoredPairs(geometry, pairs_);

@@ -55,11 +55,21 @@ struct CollisionGeometry {
     return intersectTrianglePair(corners(positions, t), corners(positions, u), hits);
   }
   /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle) and,
-  /// for normal-cone culling, which patches are flat (updateFlatPatches; empty culls nothing).
+  /// for normal-cone culling, which patches are flat (updateFlatPatches; none culls nothing).
   BroadPhaseInput broadPhaseInput(std::span<const Box3> triangleBox,
-                                  std::span<const std::uint8_t> patchFlat = {}) const {
-    return {triangleBox, triangleVertices,          triangleSurface,
-            surfaces,    selfPatches.trianglePatch, patchFlat};
+                                  const PatchFlatness* flatness = nullptr) const {
+    BroadPhaseInput input{.triangleBox = triangleBox,
+                          .triangleVertices = triangleVertices,
+                          .triangleSurface = triangleSurface,
+                          .surfaces = surfaces,
+                          .trianglePatch = selfPatches.trianglePatch};
+    if (flatness) {
+      input.patchFlat = flatness->flat;
+      input.patchNeighbourStart = selfPatches.neighbourStart;
+      input.patchNeighbour = selfPatches.neighbours;
+      input.patchFlatWith = flatness->flatWith;
+    }
+    return input;
   }
 };
 

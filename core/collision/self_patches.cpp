@@ -15,7 +15,7 @@ namespace softbake {
 
 namespace {
 constexpr std::size_t kPatchGrain = 8;   ///< patches per chunk of the cone test, at least
-constexpr Index kPatchTriangles = 128;   ///< most triangles of a patch
+constexpr Index kPatchTriangles = 32;    ///< most triangles of a patch
 constexpr double kFlatConeAngle = 80.0;  ///< degrees from the patch's mean normal
 }  // namespace
 
@@ -70,26 +70,55 @@ SelfPatches buildSelfPatches(const CollisionGeometry& geometry) {
       patches.patchStart.push_back(Index(patches.triangles.size()));
     }
   }
+  // Neighbouring patches: those that meet at a vertex, from one sorted list of (vertex, patch).
+  std::vector<std::pair<Index, Index>> corners, adjacent;
+  for (Index t = 0; t < patches.trianglePatch.size(); ++t)
+    if (const Index patch = patches.trianglePatch[t]; patch != kNoPatch)
+      for (Index v : geometry.triangleVertices[t]) corners.emplace_back(v, patch);
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  for (std::size_t i = 0; i < corners.size();) {
+    std::size_t j = i;
+    while (j < corners.size() && corners[j].first == corners[i].first) ++j;
+    for (std::size_t a = i; a < j; ++a)
+      for (std::size_t b = i; b < j; ++b)
+        if (a != b) adjacent.emplace_back(corners[a].second, corners[b].second);
+    i = j;
+  }
+  std::sort(adjacent.begin(), adjacent.end());
+  adjacent.erase(std::unique(adjacent.begin(), adjacent.end()), adjacent.end());
+  patches.neighbourStart.assign(patches.patchCount() + 1, 0);
+  for (const auto& [patch, other] : adjacent) {
+    ++patches.neighbourStart[patch + 1];
+    patches.neighbours.push_back(other);
+  }
+  for (std::size_t p = 0; p < patches.patchCount(); ++p)
+    patches.neighbourStart[p + 1] += patches.neighbourStart[p];
   return patches;
 }
 
 void updateFlatPatches(const CollisionGeometry& geometry, std::span<const Vec3> start,
-                       std::span<const Vec3> end, std::vector<std::uint8_t>& flat) {
+                       std::span<const Vec3> end, PatchFlatness& out) {
   const SelfPatches& patches = geometry.selfPatches;
-  flat.resize(patches.patchCount());
+  const std::size_t count = patches.patchCount();
+  out.flat.resize(count);
+  out.axis.resize(count);
+  out.halfAngle.resize(count);
+  out.flatWith.resize(patches.neighbours.size());
+  const double limit = kFlatConeAngle * std::numbers::pi / 180.0;
   // n within the cone of half-angle θ around a: n·a > cos θ·|n|·|a|, squared to spare the roots.
-  const double cosine = std::cos(kFlatConeAngle * std::numbers::pi / 180.0);
+  const double cosine = std::cos(limit);
   const Scalar cosineSquared = Scalar(cosine * cosine);
   // Patches cover soft triangles only, whose corners are particles.
   const Triangle* vertices = geometry.triangleVertices.data();
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, flat.size(), kPatchGrain),
+      tbb::blocked_range<std::size_t>(0, count, kPatchGrain),
       [&](const tbb::blocked_range<std::size_t>& range) {
         std::array<Vec3, 2 * kPatchTriangles> normals;
         for (std::size_t p = range.begin(); p != range.end(); ++p) {
-          const Index first = patches.patchStart[p], count = patches.patchStart[p + 1] - first;
+          const Index first = patches.patchStart[p], size = patches.patchStart[p + 1] - first;
           Vec3 axis = Vec3::Zero();
-          for (Index k = 0; k < count; ++k) {
+          for (Index k = 0; k < size; ++k) {
             const Triangle& t = vertices[patches.triangles[first + k]];
             normals[2 * k] = (start[t[1]] - start[t[0]]).cross(start[t[2]] - start[t[0]]);
             normals[2 * k + 1] = (end[t[1]] - end[t[0]]).cross(end[t[2]] - end[t[0]]);
@@ -98,13 +127,37 @@ void updateFlatPatches(const CollisionGeometry& geometry, std::span<const Vec3> 
           const Scalar axisSquared = axis.squaredNorm();
           // A degenerate triangle has no direction: it cannot vouch for its patch.
           bool inCone = axisSquared > 0 && std::isfinite(axisSquared);
-          for (Index k = 0; k < 2 * count && inCone; ++k) {
+          double widest = 1;  // the least cosine of a normal to the axis
+          for (Index k = 0; k < 2 * size && inCone; ++k) {
             const Scalar along = normals[k].dot(axis);
             inCone =
                 along > 0 && along * along > cosineSquared * normals[k].squaredNorm() * axisSquared;
+            widest = std::min(widest, double(along) / std::sqrt(double(normals[k].squaredNorm()) *
+                                                                double(axisSquared)));
           }
-          flat[p] = std::uint8_t(inCone);
+          out.flat[p] = std::uint8_t(inCone);
+          out.axis[p] = inCone ? Vec3d(axis.cast<double>().normalized()) : Vec3d::Zero();
+          out.halfAngle[p] = inCone ? std::acos(std::clamp(widest, -1.0, 1.0)) : std::numbers::pi;
         }
+      });
+  // Each entry from its own patch's side; the merged cone is symmetric in the two, so both
+  // entries of a pair agree.
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, count, kPatchGrain),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t p = range.begin(); p != range.end(); ++p)
+          for (Index k = patches.neighbourStart[p]; k < patches.neighbourStart[p + 1]; ++k) {
+            const Index q = patches.neighbours[k];
+            if (!out.flat[p] || !out.flat[q]) {
+              out.flatWith[k] = 0;
+              continue;
+            }
+            const double apart = std::acos(std::clamp(out.axis[p].dot(out.axis[q]), -1.0, 1.0));
+            const double narrow = std::min(out.halfAngle[p], out.halfAngle[q]);
+            const double wide = std::max(out.halfAngle[p], out.halfAngle[q]);
+            const double merged = apart + narrow <= wide ? wide : (apart + narrow + wide) / 2;
+            out.flatWith[k] = std::uint8_t(merged < limit);
+          }
       });
 }
 

@@ -223,7 +223,7 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
                         boxes_[t] = box;
                       }
                     });
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, detector.flatPatches());
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &detector.flatPatches());
   if (!detector.findCachedPairs(input, pairs_)) pairCache_.findPairs(*broadPhase_, input, pairs_);
   detector.dropLeftAlone(geometry, pairs_);
 

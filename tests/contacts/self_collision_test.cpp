@@ -105,6 +105,23 @@ struct Sheet {
   }
 };
 
+/// An icosphere of 1 280 faces at the origin, the one self-colliding surface of a geometry.
+struct Ball {
+  std::vector<Vec3> positions;
+  CollisionGeometry geometry;
+
+  explicit Ball(float radius) {
+    const TriangleMesh mesh = makeIcosphere(3, radius, Vec3f::Zero());
+    for (const Vec3f& p : mesh.positions) positions.push_back(p.cast<Scalar>());
+    geometry.triangleVertices = mesh.triangles;
+    geometry.triangleSurface.assign(mesh.triangles.size(), 0);
+    geometry.surfaces.push_back({0, Index(mesh.triangles.size()), true, true});
+    geometry.particleCount = Index(positions.size());
+    geometry.softTriangleCount = Index(mesh.triangles.size());
+    geometry.selfPatches = buildSelfPatches(geometry);
+  }
+};
+
 /// Every pair of the sheet's own triangles that share no vertex and cross, by the exact test.
 std::vector<TrianglePair> crossingPairs(const CollisionGeometry& geometry,
                                         const std::vector<Vec3>& positions) {
@@ -170,7 +187,7 @@ TEST(SelfCollision, ABallPressedHardIntoTheGroundNeverCrossesItself) {
       << "without self-collision the ball creases into itself: the load is hard enough to tell";
 }
 
-TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost128) {
+TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost64) {
   const Sheet sheet(24, /*withBall=*/true);
   const SelfPatches& patches = sheet.geometry.selfPatches;
   const CollisionSurface& own = sheet.geometry.surfaces[0];
@@ -181,7 +198,7 @@ TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost12
         std::span(patches.triangles)
             .subspan(patches.patchStart[p], patches.patchStart[p + 1] - patches.patchStart[p]);
     ASSERT_GE(members.size(), 1u);
-    EXPECT_LE(members.size(), 128u);
+    EXPECT_LE(members.size(), 64u);
     for (Index t : members) {
       ++seen[t];
       EXPECT_EQ(patches.trianglePatch[t], p);
@@ -209,20 +226,11 @@ TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost12
 }
 
 TEST(SelfPatches, ARoundBallIsFlatEverywhereAndAFoldedSheetIsNotAcrossOrWhereItTurns) {
-  CollisionGeometry ball;
-  const TriangleMesh mesh = makeIcosphere(3, 1.0f, Vec3f::Zero());
-  std::vector<Vec3> positions;
-  for (const Vec3f& p : mesh.positions) positions.push_back(p.cast<Scalar>());
-  ball.triangleVertices = mesh.triangles;
-  ball.triangleSurface.assign(mesh.triangles.size(), 0);
-  ball.surfaces.push_back({0, Index(mesh.triangles.size()), true, true});
-  ball.particleCount = Index(positions.size());
-  ball.softTriangleCount = Index(mesh.triangles.size());
-  ball.selfPatches = buildSelfPatches(ball);
-  std::vector<std::uint8_t> flat;
-  updateFlatPatches(ball, positions, positions, flat);
-  ASSERT_GE(flat.size(), 10u);
-  EXPECT_EQ(count(flat), flat.size());
+  const Ball ball(1.0f);
+  PatchFlatness flatness;
+  updateFlatPatches(ball.geometry, ball.positions, ball.positions, flatness);
+  ASSERT_GE(flatness.flat.size(), 10u);
+  EXPECT_EQ(count(flatness.flat), flatness.flat.size());
 
   // Folded shut along x = 0: the half x > 0 turned over onto the other, 1 cm above it. The patches
   // across the fold face both ways; those on either side are flat.
@@ -230,48 +238,122 @@ TEST(SelfPatches, ARoundBallIsFlatEverywhereAndAFoldedSheetIsNotAcrossOrWhereItT
   std::vector<Vec3> folded = sheet.rest;
   for (Vec3& p : folded)
     if (p.x() > 0) p = Vec3(-p.x(), Scalar(0.01), p.z());
-  updateFlatPatches(sheet.geometry, sheet.rest, sheet.rest, flat);
-  EXPECT_EQ(count(flat), flat.size());
-  std::vector<std::uint8_t> turning;  // flat at the start, folded at the end
-  updateFlatPatches(sheet.geometry, folded, folded, flat);
+  updateFlatPatches(sheet.geometry, sheet.rest, sheet.rest, flatness);
+  EXPECT_EQ(count(flatness.flat), flatness.flat.size());
+  EXPECT_EQ(count(flatness.flatWith), flatness.flatWith.size())
+      << "a flat sheet is one height field";
+  PatchFlatness turning;  // flat at the start, folded at the end
+  updateFlatPatches(sheet.geometry, folded, folded, flatness);
   updateFlatPatches(sheet.geometry, sheet.rest, folded, turning);
+  const std::vector<std::uint8_t>& flat = flatness.flat;
   const SelfPatches& patches = sheet.geometry.selfPatches;
-  std::size_t straddling = 0;
-  for (std::size_t p = 0; p < flat.size(); ++p) {
-    // A triangle with a corner at x > 0 is turned over; the others stay.
-    bool left = false, right = false;
+  // Per patch: 1 with a triangle left of the fold, 2 with one turned over, 3 both.
+  std::vector<int> side(flat.size(), 0);
+  for (std::size_t p = 0; p < flat.size(); ++p)
     for (Index k = patches.patchStart[p]; k < patches.patchStart[p + 1]; ++k) {
+      // A triangle with a corner at x > 0 is turned over; the others stay.
       bool turned = false;
       for (Index v : sheet.geometry.triangleVertices[patches.triangles[k]])
         turned = turned || sheet.rest[v].x() > 0;
-      (turned ? right : left) = true;
+      side[p] |= turned ? 2 : 1;
     }
-    straddling += left && right;
-    EXPECT_EQ(bool(flat[p]), !(left && right)) << "patch " << p;
+  std::size_t straddling = 0, facing = 0, besideAsOne = 0;
+  for (std::size_t p = 0; p < flat.size(); ++p) {
+    straddling += side[p] == 3;
+    EXPECT_EQ(bool(flat[p]), side[p] != 3) << "patch " << p;
     // Over the substep, a patch that turns over passes through everything: not flat either.
-    EXPECT_EQ(bool(turning[p]), !right) << "patch " << p;
+    EXPECT_EQ(bool(turning.flat[p]), side[p] == 1) << "patch " << p;
+    for (Index k = patches.neighbourStart[p]; k < patches.neighbourStart[p + 1]; ++k) {
+      const Index q = patches.neighbours[k];
+      if (side[p] == 3 || side[q] == 3) continue;
+      // Neighbours either side of the fold face each other: never flat as one. Neighbours on one
+      // side lie in one plane: always.
+      facing += side[p] != side[q];
+      besideAsOne += side[p] == side[q] && flatness.flatWith[k];
+      EXPECT_EQ(bool(flatness.flatWith[k]), side[p] == side[q]) << "patches " << p << ", " << q;
+    }
   }
   EXPECT_GT(straddling, 0u);
+  EXPECT_GT(besideAsOne, 0u);
+}
+
+TEST(SelfPatches, NeighboursAreThePatchesThatShareAVertexAndAgreeWhetherTheyAreFlatAsOne) {
+  const Sheet sheet(24, /*withBall=*/true);
+  const SelfPatches& patches = sheet.geometry.selfPatches;
+  ASSERT_EQ(patches.neighbourStart.size(), patches.patchCount() + 1);
+  std::mt19937 rng(11);
+  PatchFlatness flatness;
+  updateFlatPatches(sheet.geometry, sheet.rest, sheet.crumpled(rng, Scalar(0.3)), flatness);
+  std::size_t pairs = 0;
+  for (Index p = 0; p < patches.patchCount(); ++p)
+    for (Index q = 0; q < patches.patchCount(); ++q) {
+      bool share = false;  // brute force over the two patches' corners
+      for (Index a = patches.patchStart[p]; a < patches.patchStart[p + 1] && !share; ++a)
+        for (Index b = patches.patchStart[q]; b < patches.patchStart[q + 1] && !share; ++b)
+          for (Index v : sheet.geometry.triangleVertices[patches.triangles[b]])
+            share = share || hasVertex(sheet.geometry.triangleVertices[patches.triangles[a]], v);
+      const auto begin = patches.neighbours.begin() + patches.neighbourStart[p];
+      const auto end = patches.neighbours.begin() + patches.neighbourStart[p + 1];
+      const auto at = std::lower_bound(begin, end, q);
+      const bool listed = at != end && *at == q;
+      EXPECT_EQ(listed, p != q && share) << "patches " << p << ", " << q;
+      if (!listed) continue;
+      ++pairs;
+      // The other's entry for this one says the same.
+      const auto back =
+          std::lower_bound(patches.neighbours.begin() + patches.neighbourStart[q],
+                           patches.neighbours.begin() + patches.neighbourStart[q + 1], p);
+      EXPECT_EQ(flatness.flatWith[std::size_t(at - patches.neighbours.begin())],
+                flatness.flatWith[std::size_t(back - patches.neighbours.begin())]);
+    }
+  EXPECT_GT(pairs, patches.patchCount());
+  EXPECT_TRUE(std::is_sorted(patches.neighbours.begin() + patches.neighbourStart[0],
+                             patches.neighbours.begin() + patches.neighbourStart[1]));
+}
+
+TEST(SelfPatches, ARoundBallLeavesNoPairsWithinItself) {
+  // What culling within patches alone left on a ball, every step: the pairs across the seams
+  // between its patches, which neighbouring patches flat as one remove.
+  const Ball ball(0.3f);
+  const std::vector<Vec3>& positions = ball.positions;
+  PatchFlatness flatness;
+  updateFlatPatches(ball.geometry, positions, positions, flatness);
+  std::vector<Box3> boxes;
+  for (const Triangle& t : ball.geometry.triangleVertices) {
+    Box3 box;
+    for (Index v : t) box.extend(positions[v]);
+    boxes.push_back(Box3(box.min().array() - 0.001f, box.max().array() + 0.001f));  // the skin
+  }
+  const BroadPhaseInput input = ball.geometry.broadPhaseInput(boxes, &flatness);
+  BroadPhaseInput withinPatches = input;
+  withinPatches.patchFlatWith = {};
+  EXPECT_GT(definitionPairs(withinPatches).size(), 100u);
+  EXPECT_EQ(definitionPairs(input).size(), 0u);
+  for (BroadPhaseKind kind : kBroadPhaseKinds)
+    EXPECT_EQ(candidates(kind, input).size(), 0u) << broadPhaseName(kind);
 }
 
 TEST(SelfPatches, CullingKeepsEveryPairThatCrossesOnCrumpledSheets) {
   // The theorem the culling rests on, against brute force: no pair of triangles that cross is
   // lost, on sheets crumpled until they pass through themselves, whichever broad phase runs.
   std::mt19937 rng(7);
-  std::size_t crossing = 0, culled = 0, flatPatches = 0;
+  std::size_t crossing = 0, culled = 0, flatPatches = 0, culledAcross = 0;
   for (int trial = 0; trial < 12; ++trial) {
     const Sheet sheet(20);
     const Scalar amplitude = Scalar(0.05) + Scalar(0.05) * Scalar(trial);
     const std::vector<Vec3> shape = sheet.crumpled(rng, amplitude);
-    std::vector<std::uint8_t> flat;
-    updateFlatPatches(sheet.geometry, shape, shape, flat);
-    flatPatches += count(flat);
+    PatchFlatness flatness;
+    updateFlatPatches(sheet.geometry, shape, shape, flatness);
+    flatPatches += count(flatness.flat);
     const std::vector<Box3> boxes = sheet.boxes(shape, shape);
-    const BroadPhaseInput input = sheet.geometry.broadPhaseInput(boxes, flat);
+    const BroadPhaseInput input = sheet.geometry.broadPhaseInput(boxes, &flatness);
     const std::vector<TrianglePair> expected = crossingPairs(sheet.geometry, shape);
     crossing += expected.size();
     culled += definitionPairs(sheet.geometry.broadPhaseInput(boxes)).size() -
               definitionPairs(input).size();
+    BroadPhaseInput withinPatches = input;  // without the culling across neighbours
+    withinPatches.patchFlatWith = {};
+    culledAcross += definitionPairs(withinPatches).size() - definitionPairs(input).size();
     for (BroadPhaseKind kind : kBroadPhaseKinds) {
       const std::vector<TrianglePair> found = candidates(kind, input);
       EXPECT_EQ(found, definitionPairs(input)) << broadPhaseName(kind) << ", trial " << trial;
@@ -285,6 +367,7 @@ TEST(SelfPatches, CullingKeepsEveryPairThatCrossesOnCrumpledSheets) {
   EXPECT_GT(crossing, 100u);
   EXPECT_GT(flatPatches, 0u);
   EXPECT_GT(culled, 1000u);
+  EXPECT_GT(culledAcross, 100u);
 }
 
 TEST(SelfPatches, ThePairCacheStaysExactWhilePatchesTurnFlatAndBack) {
@@ -305,19 +388,25 @@ TEST(SelfPatches, ThePairCacheStaysExactWhilePatchesTurnFlatAndBack) {
     const auto broadPhase = makeBroadPhase(kind);
     PairCache cache;
     std::vector<TrianglePair> pairs;
-    std::vector<std::uint8_t> flat, before;
-    std::size_t turned = 0;
+    PatchFlatness flatness;
+    std::vector<std::uint8_t> before, beforeWith;
+    std::size_t turned = 0, turnedWith = 0;
     for (int step = 1; step <= kSteps; ++step) {
-      updateFlatPatches(sheet.geometry, frames[step - 1], frames[step], flat);
-      if (!before.empty())
-        for (std::size_t p = 0; p < flat.size(); ++p) turned += flat[p] != before[p];
-      before = flat;
+      updateFlatPatches(sheet.geometry, frames[step - 1], frames[step], flatness);
+      if (!before.empty()) {
+        for (std::size_t p = 0; p < before.size(); ++p) turned += flatness.flat[p] != before[p];
+        for (std::size_t k = 0; k < beforeWith.size(); ++k)
+          turnedWith += flatness.flatWith[k] != beforeWith[k];
+      }
+      before = flatness.flat;
+      beforeWith = flatness.flatWith;
       const std::vector<Box3> boxes = sheet.boxes(frames[step - 1], frames[step]);
-      const BroadPhaseInput input = sheet.geometry.broadPhaseInput(boxes, flat);
+      const BroadPhaseInput input = sheet.geometry.broadPhaseInput(boxes, &flatness);
       cache.findPairs(*broadPhase, input, pairs);
       ASSERT_EQ(pairs, definitionPairs(input)) << broadPhaseName(kind) << ", step " << step;
     }
     EXPECT_GE(turned, 4u) << broadPhaseName(kind);
+    EXPECT_GE(turnedWith, 4u) << broadPhaseName(kind);
   }
 }
 

@@ -88,7 +88,12 @@ struct Soup {
     computeBoxes(margin);
   }
 
-  BroadPhaseInput input() const { return {boxes, triangles, triangleSurface, surfaces, {}, {}}; }
+  BroadPhaseInput input() const {
+    return {.triangleBox = boxes,
+            .triangleVertices = triangles,
+            .triangleSurface = triangleSurface,
+            .surfaces = surfaces};
+  }
 };
 
 std::vector<TrianglePair> run(BroadPhase& broadPhase, const BroadPhaseInput& input) {
