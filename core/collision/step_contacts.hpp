@@ -21,8 +21,9 @@
 /// whatever moved further than predicted. The pairs the detector leaves alone (set aside, fitted,
 /// ignored) are left alone here too; a vertex its own surface placed within the gap of a triangle
 /// (the walls and fillets of a CAD part, a folded sheet) is kept no closer than it was placed.
-/// Chunks of pairs write their own buffers, joined in order and sorted by (vertex,
-/// triangle), so the stencils are the same for any thread count.
+/// Each (vertex, triangle) the pairs bring is measured once, by chunks of triangles whose buffers
+/// are joined in order and sorted by (vertex, triangle), so the stencils are the same for any
+/// thread count.
 
 #include <cstdint>
 #include <memory>
@@ -80,6 +81,9 @@ class StepContacts {
   std::unique_ptr<BroadPhase> broadPhase_;  ///< when the detector keeps no pair cache
   PairCache pairCache_;
   std::vector<TrianglePair> pairs_;
+  /// Per collision triangle, the triangles paired with it: from partner_[partnerStart_[t]].
+  std::vector<Index> partnerStart_, partnerFill_, partner_;
+  ChunkBuffers<Index> chunkCorners_;  ///< per chunk of triangles: a triangle's partners' corners
   ChunkBuffers<Found> chunkFound_;
   std::vector<Found> found_;
   std::vector<ContactStencil> stencils_;
