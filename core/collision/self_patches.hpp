@@ -1,7 +1,7 @@
 #pragma once
 /// Self-collision culling by normal cones (Volino & Magnenat-Thalmann 1994, Provot 1997).
 ///
-/// A self-colliding surface is cut once, at setup, into patches: connected regions of up to 64
+/// A self-colliding surface is cut once, at setup, into patches: connected regions of up to 32
 /// triangles grown breadth-first over shared edges, so each is a small disc of the
 /// mesh. A patch whose triangles' normals, at the start and at the end of the substep, all lie
 /// within 80° of one direction is a height field over that direction: no two of its
@@ -15,12 +15,12 @@
 /// are all that culling within patches leaves on a round body, which paid them in every step
 /// (self-collision cost eight balls falling apart 1.6 times their bake). The merged cone is the
 /// smallest around both patches' cones (its half-angle is (φ + θ₁ + θ₂)/2 for axes φ apart), a
-/// bound on the normals of both, never an exact fit. That is why a patch holds at most 64
+/// bound on the normals of both, never an exact fit. That is why a patch holds at most 32
 /// triangles: on a ball of 1 280 faces, patches of 128 span cones of 39–58° and a third of the
-/// neighbours failed the bound; at 64 every one passes.
+/// neighbours failed the bound; at 64 and at 32 every one passes.
 ///
 /// The theorem also asks that the patch's outline, seen along the cone's axis, not cross itself;
-/// that is not checked. A patch grown as a disc of 64 triangles would have to spiral around to
+/// that is not checked. A patch grown as a disc of 32 triangles would have to spiral around to
 /// break it, and its normals then leave the cone; two neighbouring discs likewise.
 
 #include <cstdint>

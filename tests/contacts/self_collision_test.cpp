@@ -187,7 +187,7 @@ TEST(SelfCollision, ABallPressedHardIntoTheGroundNeverCrossesItself) {
       << "without self-collision the ball creases into itself: the load is hard enough to tell";
 }
 
-TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost64) {
+TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost32) {
   const Sheet sheet(24, /*withBall=*/true);
   const SelfPatches& patches = sheet.geometry.selfPatches;
   const CollisionSurface& own = sheet.geometry.surfaces[0];
@@ -198,7 +198,7 @@ TEST(SelfPatches, CoverTheSelfCollidingTrianglesOnceInConnectedPatchesOfAtMost64
         std::span(patches.triangles)
             .subspan(patches.patchStart[p], patches.patchStart[p + 1] - patches.patchStart[p]);
     ASSERT_GE(members.size(), 1u);
-    EXPECT_LE(members.size(), 64u);
+    EXPECT_LE(members.size(), 32u);
     for (Index t : members) {
       ++seen[t];
       EXPECT_EQ(patches.trianglePatch[t], p);
