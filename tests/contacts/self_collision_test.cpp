@@ -257,7 +257,7 @@ TEST(SelfPatches, ARoundBallIsFlatEverywhereAndAFoldedSheetIsNotAcrossOrWhereItT
         turned = turned || sheet.rest[v].x() > 0;
       side[p] |= turned ? 2 : 1;
     }
-  std::size_t straddling = 0, facing = 0, besideAsOne = 0;
+  std::size_t straddling = 0, besideAsOne = 0;
   for (std::size_t p = 0; p < flat.size(); ++p) {
     straddling += side[p] == 3;
     EXPECT_EQ(bool(flat[p]), side[p] != 3) << "patch " << p;
@@ -266,9 +266,8 @@ TEST(SelfPatches, ARoundBallIsFlatEverywhereAndAFoldedSheetIsNotAcrossOrWhereItT
     for (Index k = patches.neighbourStart[p]; k < patches.neighbourStart[p + 1]; ++k) {
       const Index q = patches.neighbours[k];
       if (side[p] == 3 || side[q] == 3) continue;
-      // Neighbours either side of the fold face each other: never flat as one. Neighbours on one
-      // side lie in one plane: always.
-      facing += side[p] != side[q];
+      // Neighbours on one side of the fold lie in one plane: always flat as one. (None lie
+      // wholly on opposite sides: a patch that straddles the fold parts them.)
       besideAsOne += side[p] == side[q] && flatness.flatWith[k];
       EXPECT_EQ(bool(flatness.flatWith[k]), side[p] == side[q]) << "patches " << p << ", " << q;
     }
