@@ -84,6 +84,37 @@ std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
       std::plus<>());
 }
 
+std::size_t ContactHolds::catchInRound(ImplicitEuler& solver, const SimulationState& state,
+                                       Scalar dt) {
+  const Scalar skin = topology_.settings.skin;
+  std::size_t changed = 0;
+  for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
+    if (topology_.inverseMass[i] == 0) continue;
+    if (touchedPlane_[i] != kNoPlane) {
+      if (expected_[i] && !(solver.holdImpulse(i) > 0)) {
+        expected_[i] = 0;
+        touchedPlane_[i] = kNoPlane;
+        solver.releaseInRound(i);
+        ++changed;
+      }
+      continue;
+    }
+    const Vec3 end = state.position[i] + dt * (state.velocity[i] + solver.deltaV(i));
+    for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
+      const PlaneCollider& plane = topology_.planes[p];
+      if (!touchesPlane(plane, skin, end)) continue;
+      touchedPlane_[i] = std::int32_t(p);
+      heldPlane_[i] = std::int32_t(p);
+      const Scalar distance = heightAbove(plane, state.position[i]);
+      solver.holdInRound(i, plane.normal, (skin - distance) / dt, plane.friction,
+                         state.velocity[i]);
+      ++changed;
+      break;
+    }
+  }
+  return changed;
+}
+
 std::size_t ContactHolds::dropWrongExpectations(const ImplicitEuler& solver) {
   std::size_t wrong = 0;
   for (Index i : solver.heldParticles()) {

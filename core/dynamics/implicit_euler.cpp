@@ -24,6 +24,9 @@ constexpr std::size_t kChunk = 512;
 /// How far inside its gap, as a share of the skin, a contact spring may end before its force is
 /// raised and the step solved again.
 constexpr Scalar kContactTolerance = Scalar(0.1);
+/// Solves a step may take beyond the contact springs' rounds for what SolveRounds changes: plane
+/// holds caught at a solve's predicted end need one more solve after the springs' last.
+constexpr int kPlaneRounds = 1;
 
 /// y[k] += a·x[k] for k < count, over arrays that do not overlap.
 void addScaled(Scalar* __restrict y, Scalar a, const Scalar* __restrict x, std::size_t count) {
@@ -414,8 +417,18 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
   if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
+void ImplicitEuler::releaseInRound(Index particle) {
+  held_.erase(std::find(held_.begin(), held_.end(), particle));
+  holdNormal_[particle].setZero();
+  isHeld_[particle] = 0;
+  holdSpeed_[particle] = 0;
+  holdResidual_[particle] = 0;
+  holdFrictionChange_[particle].setZero();
+}
+
 bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
-                         SimulationState& state, std::span<Vec3> substepStart) {
+                         SimulationState& state, std::span<Vec3> substepStart,
+                         SolveRounds* rounds) {
   assemble(topology, forces, dt, state);
   if (!warmStarted_) {
     // The first solve starts from free fall, as every later one starts from the step before. From
@@ -429,21 +442,25 @@ bool ImplicitEuler::step(const SceneTopology& topology, const ForceBuffers& forc
   }
   stepIterations_ = 0;
   stepPhases_ = 0;
-  return stepAgain(topology, dt, state, substepStart);
+  return stepAgain(topology, dt, state, substepStart, rounds);
 }
 
 bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, SimulationState& state,
-                              std::span<Vec3> substepStart) {
+                              std::span<Vec3> substepStart, SolveRounds* rounds) {
   // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   solve(topology);
   stepIterations_ += stats_.iterations;
   // The contact springs' active set: those that pulled let go, stencils that ended inside taken
-  // in, and the step solved again from its Δv.
-  for (int round = 0; round < ContactSprings::kRounds && !contacts_.empty() &&
-                      contacts_.update(state.velocity.data(), deltaV_.data(), dt,
-                                       kContactTolerance * topology.settings.skin) > 0;
-       ++round) {
+  // in; the plane holds: particles the solve would leave on a plane held, expected ones that the
+  // plane pulled let go. Then the step is solved again from its Δv.
+  for (int round = 0; round < ContactSprings::kRounds + kPlaneRounds; ++round) {
+    std::size_t changed = 0;
+    if (round < ContactSprings::kRounds && !contacts_.empty())
+      changed += contacts_.update(state.velocity.data(), deltaV_.data(), dt,
+                                  kContactTolerance * topology.settings.skin);
+    if (rounds) changed += rounds->afterSolve(*this, state, dt);
+    if (changed == 0) break;
     solve(topology);
     stepIterations_ += stats_.iterations;
   }

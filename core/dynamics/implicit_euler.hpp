@@ -85,6 +85,18 @@ struct ImplicitSolveStats {
   std::size_t contacts = 0;     ///< contact springs active at the end of the latest step
 };
 
+class ImplicitEuler;
+/// Asked after each solve of a step whether it changed what the step holds (plane holds caught at
+/// the solve's predicted end); when it did, the step is solved again within its rounds.
+class SolveRounds {
+ public:
+  virtual std::size_t afterSolve(ImplicitEuler& solver, const SimulationState& state,
+                                 Scalar dt) = 0;
+
+ protected:
+  ~SolveRounds() = default;
+};
+
 class ImplicitEuler {
  public:
   using Mat3 = Eigen::Matrix<Scalar, 3, 3>;
@@ -110,13 +122,24 @@ class ImplicitEuler {
   /// `substepStart` receives the positions at the start of the step, for the collision stages.
   /// Returns false when some particle's velocity is not finite or exceeds settings.maxSpeed.
   bool step(const SceneTopology& topology, const ForceBuffers& forces, Scalar dt,
-            SimulationState& state, std::span<Vec3> substepStart);
+            SimulationState& state, std::span<Vec3> substepStart, SolveRounds* rounds = nullptr);
   /// The latest step again, from the same state (restored by the caller) with more particles
   /// held: the system depends on the state alone, so only the solve is redone, warm-started from
-  /// the first one. The result is what step() would give, at about half the cost (figure 7 takes
-  /// three steps in five again, for the particles that met the ground).
+  /// the first one. The result is what step() would give, at about half the cost: for what the
+  /// rounds' SolveRounds did not catch.
   bool stepAgain(const SceneTopology& topology, Scalar dt, SimulationState& state,
-                 std::span<Vec3> substepStart);
+                 std::span<Vec3> substepStart, SolveRounds* rounds = nullptr);
+  /// During a step's rounds: holds `particle` as hold() does, its speed along the normal taken
+  /// against `velocity`, the state's (what stepAgain() does for the holds set before the step).
+  void holdInRound(Index particle, const Vec3& normal, Scalar normalSpeed, Scalar friction,
+                   const Vec3& velocity) {
+    hold(particle, normal, normalSpeed, friction);
+    holdSpeed_[particle] -= normal.dot(velocity);
+  }
+  /// During a step's rounds: lets go of `particle`'s hold.
+  void releaseInRound(Index particle);
+  /// The latest solve's Δv of `particle`.
+  const Vec3& deltaV(Index particle) const { return deltaV_[particle]; }
 
   const ImplicitSolveStats& lastSolve() const { return stats_; }
 

@@ -38,6 +38,18 @@ class ExplicitStepper final : public Stepper {
   bool stableAtAnyStep() const override { return false; }
 };
 
+/// Plane holds caught within the solve's rounds.
+class RoundHolds final : public SolveRounds {
+ public:
+  explicit RoundHolds(ContactHolds& holds) : holds_(holds) {}
+  std::size_t afterSolve(ImplicitEuler& solver, const SimulationState& state, Scalar dt) override {
+    return holds_.catchInRound(solver, state, dt);
+  }
+
+ private:
+  ContactHolds& holds_;
+};
+
 /// Backward Euler, with the particles on planes held in the solve (contact_holds.hpp).
 class ImplicitStepper final : public Stepper {
  public:
@@ -57,7 +69,10 @@ class ImplicitStepper final : public Stepper {
     holds_.holdFor(solver_, state, dt, true);
     const bool planes = !topology.planes.empty();
     if (planes) std::copy(state.velocity.begin(), state.velocity.end(), velocityStart_.begin());
-    bool finite = solver_.step(topology, forces, dt, state, substepStart);
+    const bool inRounds = planes && topology.settings.collisions.response != ResponseMode::None;
+    RoundHolds rounds{holds_};
+    bool finite =
+        solver_.step(topology, forces, dt, state, substepStart, inRounds ? &rounds : nullptr);
     // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is held.
     if (!finite || !planes || topology.settings.collisions.response == ResponseMode::None)
       return finite;
@@ -69,7 +84,7 @@ class ImplicitStepper final : public Stepper {
     std::copy(substepStart.begin(), substepStart.end(), state.position.begin());
     std::copy(velocityStart_.begin(), velocityStart_.end(), state.velocity.begin());
     holds_.holdFor(solver_, state, dt, false);
-    return solver_.stepAgain(topology, dt, state, substepStart);
+    return solver_.stepAgain(topology, dt, state, substepStart, &rounds);
   }
 
   bool keepsContactsApart() const override { return true; }
