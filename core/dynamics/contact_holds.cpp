@@ -27,6 +27,23 @@ ContactHolds::ContactHolds(const SceneTopology& topology)
       heldPlane_(touchedPlane_),
       expected_(touchedPlane_.size(), 0) {}
 
+std::int32_t ContactHolds::firstTouchedPlane(const Vec3& point) const {
+  for (std::size_t p = 0; p < topology_.planes.size(); ++p)
+    if (touchesPlane(topology_.planes[p], topology_.settings.skin, point)) return std::int32_t(p);
+  return kNoPlane;
+}
+
+Scalar ContactHolds::skinSpeed(std::int32_t plane, const Vec3& position, Scalar dt) const {
+  return (topology_.settings.skin - heightAbove(topology_.planes[plane], position)) / dt;
+}
+
+bool ContactHolds::letGoIfWrong(const ImplicitEuler& solver, Index i) {
+  if (!expected_[i] || solver.holdImpulse(i) > 0) return false;
+  expected_[i] = 0;
+  touchedPlane_[i] = kNoPlane;
+  return true;
+}
+
 void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, Scalar dt,
                            bool expect) {
   solver.releaseHolds();
@@ -59,25 +76,19 @@ void ContactHolds::holdFor(ImplicitEuler& solver, const SimulationState& state, 
     if (touchedPlane_[i] == kNoPlane) continue;
     heldPlane_[i] = touchedPlane_[i];
     const PlaneCollider& plane = topology_.planes[touchedPlane_[i]];
-    // The normal speed that ends the step at the skin, where the plane pass left it.
-    const Scalar distance = heightAbove(plane, state.position[i]);
-    solver.hold(i, plane.normal, (skin - distance) / dt, plane.friction);
+    solver.hold(i, plane.normal, skinSpeed(touchedPlane_[i], state.position[i], dt),
+                plane.friction);
   }
 }
 
 std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
-  const Scalar skin = topology_.settings.skin;
   return tbb::parallel_reduce(
       tbb::blocked_range<Index>(0, Index(touchedPlane_.size()), kParticleGrain), std::size_t(0),
       [&](const tbb::blocked_range<Index>& range, std::size_t caught) {
         for (Index i = range.begin(); i != range.end(); ++i) {
           if (touchedPlane_[i] != kNoPlane || topology_.inverseMass[i] == 0) continue;
-          for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
-            if (!touchesPlane(topology_.planes[p], skin, state.position[i])) continue;
-            touchedPlane_[i] = std::int32_t(p);
-            ++caught;
-            break;
-          }
+          touchedPlane_[i] = firstTouchedPlane(state.position[i]);
+          caught += touchedPlane_[i] != kNoPlane;
         }
         return caught;
       },
@@ -86,43 +97,31 @@ std::size_t ContactHolds::catchImpacts(const SimulationState& state) {
 
 std::size_t ContactHolds::catchInRound(ImplicitEuler& solver, const SimulationState& state,
                                        Scalar dt) {
-  const Scalar skin = topology_.settings.skin;
   std::size_t changed = 0;
   for (Index i = 0; i < Index(touchedPlane_.size()); ++i) {
     if (topology_.inverseMass[i] == 0) continue;
     if (touchedPlane_[i] != kNoPlane) {
-      if (expected_[i] && !(solver.holdImpulse(i) > 0)) {
-        expected_[i] = 0;
-        touchedPlane_[i] = kNoPlane;
+      if (letGoIfWrong(solver, i)) {
         solver.releaseInRound(i);
         ++changed;
       }
       continue;
     }
-    const Vec3 end = state.position[i] + dt * (state.velocity[i] + solver.deltaV(i));
-    for (std::size_t p = 0; p < topology_.planes.size(); ++p) {
-      const PlaneCollider& plane = topology_.planes[p];
-      if (!touchesPlane(plane, skin, end)) continue;
-      touchedPlane_[i] = std::int32_t(p);
-      heldPlane_[i] = std::int32_t(p);
-      const Scalar distance = heightAbove(plane, state.position[i]);
-      solver.holdInRound(i, plane.normal, (skin - distance) / dt, plane.friction,
-                         state.velocity[i]);
-      ++changed;
-      break;
-    }
+    const std::int32_t p =
+        firstTouchedPlane(state.position[i] + dt * (state.velocity[i] + solver.deltaV(i)));
+    if (p == kNoPlane) continue;
+    touchedPlane_[i] = heldPlane_[i] = p;
+    const PlaneCollider& plane = topology_.planes[p];
+    solver.holdInRound(i, plane.normal, skinSpeed(p, state.position[i], dt), plane.friction,
+                       state.velocity[i]);
+    ++changed;
   }
   return changed;
 }
 
 std::size_t ContactHolds::dropWrongExpectations(const ImplicitEuler& solver) {
   std::size_t wrong = 0;
-  for (Index i : solver.heldParticles()) {
-    if (!expected_[i] || solver.holdImpulse(i) > 0) continue;
-    expected_[i] = 0;
-    touchedPlane_[i] = kNoPlane;
-    ++wrong;
-  }
+  for (Index i : solver.heldParticles()) wrong += letGoIfWrong(solver, i);
   return wrong;
 }
 

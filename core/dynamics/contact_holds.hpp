@@ -76,6 +76,13 @@ class ContactHolds {
   std::size_t update(const ImplicitEuler& solver);
 
  private:
+  /// The first plane whose skin `point` is within or behind, or kNoPlane.
+  std::int32_t firstTouchedPlane(const Vec3& point) const;
+  /// The speed along `plane`'s normal that takes a particle at `position` to its skin in `dt`.
+  Scalar skinSpeed(std::int32_t plane, const Vec3& position, Scalar dt) const;
+  /// Ends particle i's hold on its plane when it was held as expected and the plane pulled it.
+  bool letGoIfWrong(const ImplicitEuler& solver, Index i);
+
   const SceneTopology& topology_;
   std::vector<std::int32_t> touchedPlane_;
   std::vector<std::int32_t> heldPlane_;  ///< per particle: the plane of its hold in this step

@@ -69,13 +69,13 @@ class ImplicitStepper final : public Stepper {
     holds_.holdFor(solver_, state, dt, true);
     const bool planes = !topology.planes.empty();
     if (planes) std::copy(state.velocity.begin(), state.velocity.end(), velocityStart_.begin());
-    const bool inRounds = planes && topology.settings.collisions.response != ResponseMode::None;
-    RoundHolds rounds{holds_};
-    bool finite =
-        solver_.step(topology, forces, dt, state, substepStart, inRounds ? &rounds : nullptr);
     // Under response "none" bodies pass through planes (the paper's figure 5b): nothing is held.
-    if (!finite || !planes || topology.settings.collisions.response == ResponseMode::None)
-      return finite;
+    const bool holdsOnPlanes =
+        planes && topology.settings.collisions.response != ResponseMode::None;
+    RoundHolds rounds{holds_};
+    const bool finite =
+        solver_.step(topology, forces, dt, state, substepStart, holdsOnPlanes ? &rounds : nullptr);
+    if (!finite || !holdsOnPlanes) return finite;
     std::size_t changed = holds_.catchImpacts(state);  // first: a hold let go is not caught again
     changed += holds_.dropWrongExpectations(solver_);
     if (changed == 0) return true;
