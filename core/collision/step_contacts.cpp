@@ -15,6 +15,8 @@ namespace softbake {
 namespace {
 /// Chunks of candidate pairs: enough for TBB to balance uneven chunks.
 constexpr std::size_t kPairChunks = 128;
+/// An empty slot of the set of a triangle's partners' corners.
+constexpr Index kNoCorner = ~Index(0);
 }  // namespace
 
 StepContacts::StepContacts(const SceneTopology& topology, const CollisionGeometry& geometry)
@@ -245,17 +247,30 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
   const std::size_t chunks = pairs_.empty() ? 0 : kPairChunks;
   chunkFound_.reset(chunks);
   chunkCorners_.reset(chunks);
+  chunkSeen_.reset(chunks);
   if (chunks > 0) {
     tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
       std::vector<Found>& out = chunkFound_[chunk];
       std::vector<Index>& corners = chunkCorners_[chunk];
+      std::vector<Index>& seen = chunkSeen_[chunk];
       for (std::size_t t = triangles * chunk / chunks; t < triangles * (chunk + 1) / chunks; ++t) {
         if (partnerStart_[t] == partnerStart_[t + 1]) continue;
+        // The corners, each once, through an open-addressed set at most half full: sorting them
+        // to drop the repeats took a fifth of this stage.
+        int bits = 4;
+        while ((std::size_t(1) << bits) < 6 * std::size_t(partnerStart_[t + 1] - partnerStart_[t]))
+          ++bits;
+        const std::size_t mask = (std::size_t(1) << bits) - 1;
+        seen.assign(mask + 1, kNoCorner);
         corners.clear();
         for (Index k = partnerStart_[t]; k < partnerStart_[t + 1]; ++k)
-          for (Index v : geometry.triangleVertices[partner_[k]]) corners.push_back(v);
-        std::sort(corners.begin(), corners.end());
-        corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+          for (Index v : geometry.triangleVertices[partner_[k]]) {
+            std::size_t slot = (std::uint32_t(v) * 2654435769u) >> (32 - bits);
+            while (seen[slot] != kNoCorner && seen[slot] != v) slot = (slot + 1) & mask;
+            if (seen[slot] == v) continue;
+            seen[slot] = v;
+            corners.push_back(v);
+          }
         for (Index v : corners) tryVertex(topology, geometry, start, v, Index(t), out);
       }
     });

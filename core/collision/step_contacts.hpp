@@ -84,6 +84,7 @@ class StepContacts {
   /// Per collision triangle, the triangles paired with it: from partner_[partnerStart_[t]].
   std::vector<Index> partnerStart_, partnerFill_, partner_;
   ChunkBuffers<Index> chunkCorners_;  ///< per chunk of triangles: a triangle's partners' corners
+  ChunkBuffers<Index> chunkSeen_;     ///< and the set that drops their repeats
   ChunkBuffers<Found> chunkFound_;
   std::vector<Found> found_;
   std::vector<ContactStencil> stencils_;
