@@ -283,7 +283,7 @@ void ImplicitEuler::assemble(const SceneTopology& topology, const ForceBuffers& 
   contacts_.begin(state.position.data(), state.velocity.data(), topology.settings.gravity, h);
 }
 
-void ImplicitEuler::solve(const SceneTopology& topology) {
+void ImplicitEuler::solve(const SceneTopology& topology, double relativeTolerance) {
   // Preconditioned CG (Shewchuk 1994, B3), warm-started from the previous step's Δv: successive
   // steps change velocity alike, so the first residual is already small. Pinned entries stay 0.
   // Held particles start, and stay, with their prescribed normal part (modified PCG, Baraff &
@@ -387,11 +387,11 @@ void ImplicitEuler::solve(const SceneTopology& topology) {
                            kGravityShare * double(gravityImpulse_.norm()) * massNorm_);
         zeroRhs = rhsNorm == 0;
         if (zeroRhs) return false;
-        tolerance = kTolerance * rhsNorm;
+        tolerance = relativeTolerance * rhsNorm;
         stats_.relativeResidual = std::sqrt(total[2]) / rhsNorm;
         iteration = 1;
         pass = Pass::Product;
-        return stats_.relativeResidual > kTolerance && iteration <= kMaxIterations;
+        return stats_.relativeResidual > relativeTolerance && iteration <= kMaxIterations;
       case Pass::Product: {
         const double curvature = volume ? total[0] + finishVolumeDots() : total[0];
         alpha = Scalar(rz / curvature);
@@ -449,19 +449,28 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
                               std::span<Vec3> substepStart, SolveRounds* rounds) {
   // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
-  solve(topology);
+  solve(topology, kTolerance);
   stepIterations_ += stats_.iterations;
   // The contact springs' active set: those that pulled let go, stencils that ended inside taken
   // in; the plane holds: particles the solve would leave on a plane held, expected ones that the
-  // plane pulled let go. Then the step is solved again from its Δv.
-  for (int round = 0; round < ContactSprings::kRounds + kPlaneRounds; ++round) {
+  // plane pulled let go. Then the step is solved again from its Δv. A solve that another round may
+  // follow only has to tell the round which contacts change, so it stops at kRoundTolerance, and
+  // the last solve is taken to kTolerance (inexact Newton: Dembo, Eisenstat & Steihaug 1982).
+  constexpr int kAllRounds = ContactSprings::kRounds + kPlaneRounds;
+  bool exact = true;
+  for (int round = 0; round < kAllRounds; ++round) {
     std::size_t changed = 0;
     if (round < ContactSprings::kRounds && !contacts_.empty())
       changed += contacts_.update(state.velocity.data(), deltaV_.data(), dt,
                                   kContactTolerance * topology.settings.skin);
     if (rounds) changed += rounds->afterSolve(*this, state, dt);
     if (changed == 0) break;
-    solve(topology);
+    exact = round + 1 == kAllRounds;
+    solve(topology, exact ? kTolerance : kRoundTolerance);
+    stepIterations_ += stats_.iterations;
+  }
+  if (!exact) {
+    solve(topology, kTolerance);
     stepIterations_ += stats_.iterations;
   }
   stats_.stepIterations = stepIterations_;
