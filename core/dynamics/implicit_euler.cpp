@@ -417,6 +417,18 @@ void ImplicitEuler::solve(const SceneTopology& topology, double relativeToleranc
   if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
+double ImplicitEuler::firstSolveTolerance(const SimulationSettings& settings, Scalar dt) {
+  // The rounds start from the contacts the first solve finds, so its error must not move a
+  // particle by more than the springs' own tolerance (kContactTolerance of the skin). A relative
+  // residual ε leaves an error of about ε·h·g in Δv, so ε·h²·g a step in the position: at one
+  // substep a frame ε is held to kTolerance, from four (0.094 at 24 frames/s, a 1 mm skin and
+  // Earth's gravity) it is about kRoundTolerance.
+  const double g = double(settings.gravity.norm());
+  if (!(g > 0) || !(dt > 0)) return kTolerance;
+  return std::clamp(double(kContactTolerance) * double(settings.skin) / (double(dt) * dt * g),
+                    kTolerance, kRoundTolerance);
+}
+
 void ImplicitEuler::releaseInRound(Index particle) {
   held_.erase(std::find(held_.begin(), held_.end(), particle));
   holdNormal_[particle].setZero();
@@ -449,7 +461,8 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
                               std::span<Vec3> substepStart, SolveRounds* rounds) {
   // A hold prescribes the velocity along its normal; Δv's part is what that takes from v₀.
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
-  solve(topology, kTolerance);
+  const double firstTolerance = firstSolveTolerance(topology.settings, dt);
+  solve(topology, firstTolerance);
   stepIterations_ += stats_.iterations;
   // The contact springs' active set: those that pulled let go, stencils that ended inside taken
   // in; the plane holds: particles the solve would leave on a plane held, expected ones that the
@@ -457,7 +470,7 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
   // follow only has to tell the round which contacts change, so it stops at kRoundTolerance, and
   // the last solve is taken to kTolerance (inexact Newton: Dembo, Eisenstat & Steihaug 1982).
   constexpr int kAllRounds = ContactSprings::kRounds + kPlaneRounds;
-  bool exact = true;
+  bool exact = firstTolerance == kTolerance;
   for (int round = 0; round < kAllRounds; ++round) {
     std::size_t changed = 0;
     if (round < ContactSprings::kRounds && !contacts_.empty())

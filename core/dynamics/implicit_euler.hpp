@@ -108,10 +108,14 @@ class ImplicitEuler {
   /// the tests check: rest shape and volume, momentum, energy that only falls.
   static constexpr double kTolerance = 1e-2;
   /// The same for a solve of a step's contact rounds that another round follows (stepAgain()).
-  /// The step's first solve stays at kTolerance: the rounds start from the contacts it finds, and
-  /// at one substep a frame, figure 7 started from a first solve stopped at 3e-2 gained 365 J
-  /// (38 J from one at 1e-2). 0.3 for the rounds gained 140 J there; 0.1 gains 4.6 J.
+  /// 0.3 let figure 7 at one substep a frame gain 140 J; 0.1 gains 4.6 J (38 J with every solve
+  /// at kTolerance).
   static constexpr double kRoundTolerance = 1e-1;
+  /// The relative residual of a step's first solve, between kTolerance and kRoundTolerance: what
+  /// keeps the error it leaves in a step's motion under gravity within the contact springs'
+  /// tolerance (implicit_euler.cpp). A first solve stopped at 3e-2 at one substep a frame let
+  /// figure 7 gain 365 J.
+  static double firstSolveTolerance(const SimulationSettings& settings, Scalar dt);
   /// |b| above measures the load beyond gravity's impulse M·h·g, which moves every free particle
   /// alike and which the springs do not resist; this share of |M·h·g| is its floor. Measured
   /// against the whole |b|, a residual of 1% of gravity's impulse bent bodies in free fall: the
