@@ -21,19 +21,14 @@ void PairCache::rebuild(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   if (first) {
     double size = 0;
     for (const Box3& box : input.triangleBox) size += double(box.sizes().maxCoeff());
-    meanBox_ = count ? Scalar(size / double(count)) : Scalar(0);
-    margin_ = Scalar(marginFraction_) * meanBox_;
-  }
-  if (anchor_.size() != count) {
-    anchor_.assign(count, Vec3::Zero());
-    anchorCall_.assign(count, kNoAnchor);
+    margin_ = count ? Scalar(marginFraction_ * size / double(count)) : Scalar(0);
   }
   const auto growAll = [&] {
     grown_.resize(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kBoxGrain),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t t = range.begin(); t != range.end(); ++t)
-                          grown_[t] = grow(Index(t), input.triangleBox[t]);
+                          grown_[t] = grow(input.triangleBox[t]);
                       });
     broadPhase.findPairs(grownInput(input), cached_);
   };
@@ -66,21 +61,8 @@ std::size_t PairCache::exactCount(const BroadPhaseInput& input) const {
       std::plus<>());
 }
 
-Box3 PairCache::grow(Index t, const Box3& box) {
-  Box3 grown(box.min().array() - margin_, box.max().array() + margin_);
-  const Vec3 centre = box.center();
-  if (anchorCall_[t] != kNoAnchor && calls_ > anchorCall_[t]) {
-    const Scalar most = kMostDriftBoxes * meanBox_;
-    const Vec3 drift =
-        ((centre - anchor_[t]) * Scalar(kLookAheadCalls / double(calls_ - anchorCall_[t])))
-            .cwiseMax(-most)
-            .cwiseMin(most);
-    grown.min() += drift.cwiseMin(0);
-    grown.max() += drift.cwiseMax(0);
-  }
-  anchor_[t] = centre;
-  anchorCall_[t] = calls_;
-  return grown;
+Box3 PairCache::grow(const Box3& box) const {
+  return Box3(box.min().array() - margin_, box.max().array() + margin_);
 }
 
 BroadPhaseInput PairCache::grownInput(const BroadPhaseInput& input) const {
@@ -170,7 +152,7 @@ bool PairCache::update(BroadPhase& broadPhase, const BroadPhaseInput& input) {
   updatedSinceRebuild_ += left_.size();
   if (double(updatedSinceRebuild_) > kRebuildShare * double(count)) return false;
 
-  for (Index t : left_) grown_[t] = grow(t, input.triangleBox[t]);
+  for (Index t : left_) grown_[t] = grow(input.triangleBox[t]);
   if (!broadPhase.findPairsInvolving(grownInput(input), left_, fresh_)) return false;
   // Their old pairs out, their new ones in, in order.
   hasLeft_.resize(count);
@@ -212,7 +194,6 @@ PairCache::Still PairCache::filterIfStill(const BroadPhaseInput& input,
 void PairCache::findPairs(BroadPhase& broadPhase, const BroadPhaseInput& input,
                           std::vector<TrianglePair>& pairs,
                           std::span<const std::uint8_t> involving) {
-  ++calls_;
   const Still still = filterIfStill(input, pairs, involving);
   if (still == Still::Filtered) return;
   if (still == Still::NotMade || !update(broadPhase, input)) rebuild(broadPhase, input);

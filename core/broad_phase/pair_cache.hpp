@@ -56,14 +56,6 @@ class PairCache {
   /// The first rebuild halves the margin until the cache holds at most this many times the exact
   /// pairs. Figure 7 and the ball piles hold about 4 times at the default margin.
   static constexpr std::size_t kMostCachedPerPair = 8;
-  /// A grown box also reaches as far ahead as its triangle drifted in this many findPairs() calls
-  /// (about two substeps: the contacts of the step, the detector and the failsafe each call once
-  /// or more). A pile falling or settling moved every triangle out of its box so often that the
-  /// cache was rebuilt on 164 of figure 7's 189 substeps; reaching ahead, 65 (12 calls: 49, with
-  /// more cached pairs to filter).
-  static constexpr double kLookAheadCalls = 6;
-  /// and no further than this many mean boxes (a triangle the detangler moved jumps).
-  static constexpr Scalar kMostDriftBoxes = 4;
 
  private:
   void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
@@ -93,18 +85,12 @@ class PairCache {
   /// Chunk `chunk` of `chunks` of filter(), into buffers_.
   void filterChunk(const BroadPhaseInput& input, std::span<const std::uint8_t> involving,
                    std::size_t chunk, std::size_t chunks);
-  /// Triangle t's `box` grown by the margin on every side, and on the side it drifts towards by
-  /// kLookAheadCalls of its drift since it was last grown; anchors t there.
-  Box3 grow(Index t, const Box3& box);
+  /// `box` grown by the margin on every side.
+  Box3 grow(const Box3& box) const;
   BroadPhaseInput grownInput(const BroadPhaseInput& input) const;
 
   double marginFraction_;
   Scalar margin_ = -1;  ///< scene units; negative until the first rebuild
-  Scalar meanBox_ = 0;  ///< the mean box's largest side at the first rebuild
-  static constexpr std::uint32_t kNoAnchor = ~std::uint32_t(0);
-  std::uint32_t calls_ = 0;   ///< findPairs() calls so far: the clock drift is measured by
-  std::vector<Vec3> anchor_;  ///< per triangle: its box's centre where it was last grown
-  std::vector<std::uint32_t> anchorCall_;  ///< and the call it was grown at
   std::vector<Box3> grown_;
   std::vector<TrianglePair> cached_;
   ChunkBuffers<TrianglePair> buffers_;  ///< per filter chunk

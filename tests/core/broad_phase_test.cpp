@@ -353,31 +353,6 @@ TEST(PairCache, GivesTheBroadPhasesExactPairsWhileBodiesCreepAndJump) {
   }
 }
 
-TEST(PairCache, ReachesAheadOfBodiesThatDriftSteadily) {
-  // Bodies drifting by half a box a call leave a box grown by a quarter of one on every call; a
-  // grown box that reaches ahead by its triangle's drift holds them for several calls. The pairs
-  // stay brute force's on every call.
-  std::mt19937 rng(23);
-  Soup scene = icosphereScene(rng, 1, 2, 3, true);
-  double size = 0;
-  for (const Box3& box : scene.boxes) size += double(box.sizes().maxCoeff());
-  const Scalar drift = Scalar(0.5 * size / double(scene.boxes.size()));
-  BvhBroadPhase broadPhase;
-  PairCache cache;
-  std::vector<TrianglePair> pairs;
-  constexpr int kCalls = 40;
-  for (int call = 0; call < kCalls; ++call) {
-    cache.findPairs(broadPhase, scene.input(), pairs);
-    const std::vector<TrianglePair> expected = brutePairs(scene.input());
-    ASSERT_EQ(pairs, expected) << "call " << call << ": " << firstDifference(expected, pairs);
-    scene.moveMovingVertices([&](Vec3& p) { p.x() += drift; });
-    scene.computeBoxes(Scalar(0.01));
-  }
-  EXPECT_LE(cache.rebuilds() + cache.updates(), std::size_t(kCalls / 4));
-  RecordProperty("updates", int(cache.updates()));
-  RecordProperty("rebuilds", int(cache.rebuilds()));
-}
-
 TEST(PairCache, FindsAgainOnlyTheTrianglesThatLeftTheirGrownBoxes) {
   // One body creeps into the others a little each step, its vertices shaken, so a few of its
   // triangles leave their grown boxes on most steps: their pairs are found again alone, and the
