@@ -414,6 +414,7 @@ void ImplicitEuler::solve(const SceneTopology& topology, double relativeToleranc
     return false;
   };
   stepPhases_ += phases_.run(chunks, runPass, between);
+  stepIterations_ += stats_.iterations;
   if (zeroRhs) forEachParticle(n, [&](Index i) { deltaV_[i] = holdSpeed_[i] * holdNormal_[i]; });
 }
 
@@ -463,7 +464,6 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
   for (Index i : held_) holdSpeed_[i] -= holdNormal_[i].dot(state.velocity[i]);
   const double firstTolerance = firstSolveTolerance(topology.settings, dt);
   solve(topology, firstTolerance);
-  stepIterations_ += stats_.iterations;
   // The contact springs' active set: those that pulled let go, stencils that ended inside taken
   // in; the plane holds: particles the solve would leave on a plane held, expected ones that the
   // plane pulled let go. Then the step is solved again from its Δv. A solve that another round may
@@ -480,12 +480,8 @@ bool ImplicitEuler::stepAgain(const SceneTopology& topology, Scalar dt, Simulati
     if (changed == 0) break;
     exact = round + 1 == kAllRounds;
     solve(topology, exact ? kTolerance : kRoundTolerance);
-    stepIterations_ += stats_.iterations;
   }
-  if (!exact) {
-    solve(topology, kTolerance);
-    stepIterations_ += stats_.iterations;
-  }
+  if (!exact) solve(topology, kTolerance);
   stats_.stepIterations = stepIterations_;
   stats_.stepPhases = stepPhases_;
   stats_.contacts = contacts_.activeCount();

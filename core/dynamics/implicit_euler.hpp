@@ -185,7 +185,8 @@ class ImplicitEuler {
   double finishVolumeDots();
   /// out_i += factor·c·(g·x)·g_i at the particles of `chunk`, with the latest finishVolumeDots().
   void addVolumeProduct(Vec3* out, Scalar factor, std::size_t chunk);
-  /// One PCG solve from the current Δv, stopped at |r| ≤ relativeTolerance·|b|.
+  /// One PCG solve from the current Δv, stopped at |r| ≤ relativeTolerance·|b|; adds its
+  /// iterations and phases to the step's.
   void solve(const SceneTopology& topology, double relativeTolerance);
   /// Makes each body without pins or held particles change momentum by exactly its external
   /// impulse.
