@@ -4,10 +4,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 
 #include "core/collision/detection.hpp"
 #include "core/collision/geometry.hpp"
+#include "core/collision/self_patches.hpp"
 #include "core/collision/triangle_pair_intersection.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
@@ -32,6 +34,9 @@ constexpr double kRoundingOfSeparation = 0.01;
 /// in every substep.
 constexpr double kThicknessOfShortEdge = 0.25;
 constexpr double kShortEdgeShare = 0.05;
+/// Triangles closer than this fraction of their coordinates' magnitude touch: a few roundings of
+/// single precision, in which positions are held.
+constexpr double kTouchingOfExtent = 4.0 * std::numeric_limits<float>::epsilon();
 /// Edges closer to parallel than this sine of their angle have no common normal to cross along.
 constexpr double kParallelSine = 1e-3;
 
@@ -160,7 +165,9 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
     const bool found = findImpacts(topology, geometry, detector, start, state.position, pass > 0);
     std::fill(moved_.begin(), moved_.end(), 0);
     if (!found) break;
-    stats.impacts += impacts_.size();
+    stats.impacts += impacts_.size() + crossings_.size();
+    // Crossings only zones part: passes of impulses would leave them as they are.
+    if (pass < passes_.impulses && impacts_.empty()) pass = passes_.impulses;
     if (pass == passes) {
       // Stage 3: the start had no crossings, so going back to it has none.
       std::copy(start.begin(), start.begin() + Index(state.position.size()),
@@ -169,6 +176,11 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
       ++stats.frozen;
     } else if (pass < passes_.impulses) {
       applyImpulses(topology, geometry, state);
+      // Measured again next pass, with the meetings the impulses moved.
+      for (const TrianglePair& crossing : crossings_)
+        for (Index t : {crossing.first, crossing.second})
+          for (Index v : geometry.triangleVertices[t])
+            if (v < geometry.particleCount) moved_[v] = 1;
     } else {
       // A translating pass that finds the very meetings of the pass before cannot part them:
       // translated again, the zones end where they ended, and an engine resting on the ground
@@ -179,6 +191,7 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
       stats.zoneParticles = moveZones(topology, geometry, start, state, pass >= firstStaying);
       lastMeetings_.clear();
       for (const FailsafeImpact& impact : impacts_) lastMeetings_.push_back(impact.vertex);
+      lastCrossings_ = crossings_;
     }
     keepAbovePlanes(topology, state, dt);
   }
@@ -196,7 +209,6 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
   // The detector's cached pairs hold this stage's almost always: the response moves particles
   // far less than the cache's margin, and the few triangles it moves out are found again there.
   // Its own broad phase only when the detector keeps no cache.
-  // Culled as the detector's broad phase was: its cache holds pairs by those patches.
   // A later pass measures again only the pairs of triangles the previous pass moved; of an
   // engine's 1.5M pairs a pass moves a few hundred triangles.
   const Index particles = geometry.particleCount;
@@ -210,7 +222,11 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
     }
     involving = triangleMoved_;
   }
-  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &detector.flatPatches());
+  // Self-collision culled by normal cones, as the detector culls it, but over this pass's own
+  // motion: impulses and zones turn triangles, and a patch the detector found flat may no longer
+  // be one (a zone shifted in a body's fold let two of its triangles cross, unseen).
+  updateFlatPatches(geometry, start, end, patchFlat_);
+  const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &patchFlat_);
   if (!detector.findCachedPairs(input, pairs_, involving))
     pairCache_.findPairs(*broadPhase_, input, pairs_, involving);
   detector.dropIgnoredPairs(geometry, pairs_);
@@ -301,12 +317,47 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
   chunkImpacts_.join(impacts_);
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
-  std::erase_if(impacts_, [&](const FailsafeImpact& impact) {
-    return (closeAtRest(topology, geometry, impact) &&
-            !crosses(geometry, start, end, impact, impact.separation)) ||
-           notClosing(geometry, start, end, impact) || intersectedAtStart(geometry, start, impact);
-  });
-  return !impacts_.empty();
+  // Each meeting's verdict, in parallel (the intersection tests dominate an assembly's pass),
+  // then the kept ones in order. A fitted meeting is left to give, unless its triangles now
+  // intersect where they did not at the start: faces modelled as near-copies of each other (two
+  // parts of a spider, 13 µm apart against a 1 mm skin) intersect by their nearly parallel edges
+  // as soon as they turn against each other, a crossing no side test sees. Such a meeting is not
+  // pushed (pushing fitted faces apart blew an assembly of 55 fitted parts up); its two triangles
+  // move as one zone, which keeps them as they were at the start.
+  enum Verdict : std::uint8_t { kKeep, kDrop, kCrossing };
+  verdicts_.resize(impacts_.size());
+  crossingOf_.resize(impacts_.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, impacts_.size(), 16),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const FailsafeImpact& impact = impacts_[i];
+                        Verdict verdict = kKeep;
+                        if (closeAtRest(topology, geometry, impact) &&
+                            !crosses(geometry, start, end, impact, impact.separation)) {
+                          const std::optional<TrianglePair> now =
+                              crossingTriangles(geometry, end, impact, Contact::Touching);
+                          verdict =
+                              now && !crossingTriangles(geometry, start, impact, Contact::Touching)
+                                  ? kCrossing
+                                  : kDrop;
+                          if (now) crossingOf_[i] = *now;
+                        } else if (notClosing(geometry, start, end, impact) ||
+                                   crossingTriangles(geometry, start, impact, Contact::Crossing)) {
+                          verdict = kDrop;
+                        }
+                        verdicts_[i] = verdict;
+                      }
+                    });
+  crossings_.clear();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < impacts_.size(); ++i) {
+    if (verdicts_[i] == kCrossing) crossings_.push_back(crossingOf_[i]);
+    if (verdicts_[i] == kKeep) impacts_[kept++] = impacts_[i];
+  }
+  impacts_.resize(kept);
+  std::sort(crossings_.begin(), crossings_.end());
+  crossings_.erase(std::unique(crossings_.begin(), crossings_.end()), crossings_.end());
+  return !impacts_.empty() || !crossings_.empty();
 }
 
 bool CollisionFailsafe::closeAtRest(const SceneTopology& topology,
@@ -368,28 +419,46 @@ bool CollisionFailsafe::notClosing(const CollisionGeometry& geometry, std::span<
          std::abs(after) >= std::abs(before) - kRoundingOfSeparation * impact.separation;
 }
 
-bool CollisionFailsafe::intersectedAtStart(const CollisionGeometry& geometry,
-                                           std::span<const Vec3> start,
-                                           const FailsafeImpact& impact) const {
+std::optional<TrianglePair> CollisionFailsafe::crossingTriangles(const CollisionGeometry& geometry,
+                                                                 std::span<const Vec3> at,
+                                                                 const FailsafeImpact& impact,
+                                                                 Contact contact) const {
   const auto around = [&](Index v) {
     return std::span(vertexTriangles_)
         .subspan(vertexTriangleStart_[v], vertexTriangleStart_[v + 1] - vertexTriangleStart_[v]);
   };
   TrianglePairHits hits;
+  // Touching counts: faces of two surfaces pressed onto one plane (stacked near-copies lifted
+  // to the same height above the ground) overlap there, which the line–triangle test, blind to
+  // coplanar triangles, does not report.
   const auto intersect = [&](Index t, Index u) {
-    return geometry.trianglesCross(start, t, u, hits);
+    if (geometry.trianglesCross(at, t, u, hits)) return true;
+    if (contact == Contact::Crossing) return false;
+    // Triangles that share a corner touch there by construction.
+    for (Index v : geometry.triangleVertices[t])
+      if (hasVertex(geometry.triangleVertices[u], v)) return false;
+    std::array<Vec3d, 3> a, b;
+    double extent = 0;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = geometry.vertex(at, geometry.triangleVertices[t][k]).cast<double>();
+      b[k] = geometry.vertex(at, geometry.triangleVertices[u][k]).cast<double>();
+      extent = std::max({extent, a[k].cwiseAbs().maxCoeff(), b[k].cwiseAbs().maxCoeff()});
+    }
+    return triangleDistance(a, b) <= kTouchingOfExtent * extent;
   };
+  const auto pair = [](Index t, Index u) { return TrianglePair{std::min(t, u), std::max(t, u)}; };
   if (!impact.edge) {
     for (Index t : around(impact.vertex[0]))
-      if (intersect(t, impact.face)) return true;
-    return false;
+      if (intersect(t, impact.face)) return pair(t, impact.face);
+    return std::nullopt;
   }
   for (Index t : around(impact.vertex[0])) {
     if (!hasVertex(geometry.triangleVertices[t], impact.vertex[1])) continue;
     for (Index u : around(impact.vertex[2]))
-      if (hasVertex(geometry.triangleVertices[u], impact.vertex[3]) && intersect(t, u)) return true;
+      if (hasVertex(geometry.triangleVertices[u], impact.vertex[3]) && intersect(t, u))
+        return pair(t, u);
   }
-  return false;
+  return std::nullopt;
 }
 
 void CollisionFailsafe::applyImpulses(const SceneTopology& topology,
@@ -467,10 +536,10 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
       zoneMembers_.push_back(v);
     }
   };
-  for (const FailsafeImpact& meeting : impacts_) {
+  const auto unite = [&](std::span<const Index> vertices) {
     Index root = ~Index(0);
     bool fixed = false;
-    for (Index v : meeting.vertex) {
+    for (Index v : vertices) {
       if (v >= particles) {
         fixed = true;
         continue;
@@ -488,6 +557,13 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
       }
     }
     if (root != ~Index(0) && fixed) zoneFixed_[root] = 1;
+  };
+  for (const FailsafeImpact& meeting : impacts_) unite(meeting.vertex);
+  for (const TrianglePair& crossing : crossings_) {
+    const Triangle& a = geometry.triangleVertices[crossing.first];
+    const Triangle& b = geometry.triangleVertices[crossing.second];
+    const std::array<Index, 6> corners{a[0], a[1], a[2], b[0], b[1], b[2]};
+    unite(corners);
   }
   for (Index v : zoneMembers_) {
     const Index root = zoneOf(v);
@@ -518,7 +594,8 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
 }
 
 bool CollisionFailsafe::sameMeetings() const {
-  return std::equal(impacts_.begin(), impacts_.end(), lastMeetings_.begin(), lastMeetings_.end(),
+  return crossings_ == lastCrossings_ &&
+         std::equal(impacts_.begin(), impacts_.end(), lastMeetings_.begin(), lastMeetings_.end(),
                     [](const FailsafeImpact& impact, const std::array<Index, 4>& vertices) {
                       return impact.vertex == vertices;
                     });

@@ -36,7 +36,13 @@
 /// other: the scene was made so, and holding them apart would push the bodies away from their
 /// shapes and fits, and each push into the next fit (an engine of 115 parts held the failsafe at
 /// its last stage in every substep). Less than that is rounding and the fit's own give: faces
-/// fitted onto each other swap sides by it in every substep. So is a meeting already within its
+/// fitted onto each other swap sides by it in every substep. Unless the fitted triangles then
+/// intersect, or touch, where they did not at the start: near-copies of one surface in another
+/// (a spider's two shells 13 µm apart) cross by their nearly parallel edges as soon as they turn
+/// against each other, and two stacked faces lifted to one height above the ground overlap in a
+/// plane; neither is a side any test sees change. Such a pair is not pushed (pushing fitted faces
+/// apart blew an assembly of 55 fitted parts up): its two triangles go into one zone (stage 2),
+/// which keeps them as they were at the start. So is a meeting already within its
 /// tolerance where the substep starts that ends it no closer on the same side: nothing crossed,
 /// and no stage here can leave it further apart than the start.
 ///
@@ -50,7 +56,10 @@
 /// (self-collision only for surfaces that have it on).
 ///
 /// Detection runs in parallel over the broad phase's pairs; the meetings are sorted before any is
-/// applied, so the result is the same for any number of threads.
+/// applied, so the result is the same for any number of threads. Self-collision is culled by
+/// normal cones (core/collision/self_patches.hpp) over each pass's own motion: impulses and zones
+/// turn triangles, and with the detector's patches a zone shifted in a body's fold let two of its
+/// triangles cross unseen.
 
 #include <cstdint>
 #include <memory>
@@ -62,6 +71,7 @@
 #include "core/broad_phase/pair_cache.hpp"
 #include "core/collision/continuous_collision.hpp"
 #include "core/collision/initial_overlap.hpp"
+#include "core/collision/self_patches.hpp"
 #include "core/parallel.hpp"
 #include "core/types.hpp"
 
@@ -141,8 +151,15 @@ class CollisionFailsafe {
   bool findImpacts(const SceneTopology& topology, const CollisionGeometry& geometry,
                    CollisionDetector& detector, std::span<const Vec3> start,
                    std::span<const Vec3> end, bool onlyMoved);
-  bool intersectedAtStart(const CollisionGeometry& geometry, std::span<const Vec3> start,
-                          const FailsafeImpact& impact) const;
+  /// Crossing: the line–triangle test finds an edge through a face. Touching: that, or the two
+  /// triangles lie within rounding of each other without sharing a corner (coplanar overlaps).
+  enum class Contact { Crossing, Touching };
+  /// A pair of triangles around the meeting's primitives (the vertex's against the face, the
+  /// edges' against each other) in `contact` with the particles at `at`, if any.
+  std::optional<TrianglePair> crossingTriangles(const CollisionGeometry& geometry,
+                                                std::span<const Vec3> at,
+                                                const FailsafeImpact& impact,
+                                                Contact contact) const;
   /// Whether the meeting's primitives were closer than its separation in the scene's initial
   /// state: a mesh finer than the skin, a part thinner than it, parts of an assembly fitted tighter
   /// than it were made that close.
@@ -166,7 +183,7 @@ class CollisionFailsafe {
                         std::span<const Vec3> start, SimulationState& state, bool stayAtStart);
   Index zoneOf(Index v);
   void clearZones();
-  /// Whether impacts_ holds the meetings of the latest translating zone pass.
+  /// Whether impacts_ and crossings_ hold the meetings of the latest translating zone pass.
   bool sameMeetings() const;
 
   FailsafePasses passes_;
@@ -178,6 +195,7 @@ class CollisionFailsafe {
   std::unique_ptr<BroadPhase> broadPhase_;
   PairCache pairCache_;  ///< only when the detector keeps none
   std::vector<TrianglePair> pairs_;
+  PatchFlatness patchFlat_;  ///< the self-collision patches that are flat over this pass
   std::vector<std::pair<Index, Index>> tangled_;  ///< surface pairs, sorted
   /// Per collision triangle: bit k set when it owns its corner k, bit 3 + k its edge k → k+1. A
   /// vertex or an edge is tested from the lowest-numbered triangle that holds it, once per pair
@@ -186,6 +204,11 @@ class CollisionFailsafe {
   std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
   ChunkBuffers<FailsafeImpact> chunkImpacts_;
   std::vector<FailsafeImpact> impacts_;
+  /// Triangle pairs of fitted meetings that intersect where the substep ends but did not where it
+  /// started, sorted: each goes into a zone whole.
+  std::vector<TrianglePair> crossings_, lastCrossings_;
+  std::vector<std::uint8_t> verdicts_;    ///< scratch, per meeting found
+  std::vector<TrianglePair> crossingOf_;  ///< scratch, per meeting found
   /// The primitives of the latest translating zone pass's meetings, sorted as impacts_ is.
   std::vector<std::array<Index, 4>> lastMeetings_;
   std::vector<std::uint8_t> moved_;          ///< per particle: moved by this failsafe's latest pass

@@ -8,7 +8,8 @@
 /// triangles can cross, so the broad phases skip its pairs within itself (pairEligible). Without
 /// that, a self-colliding ball pairs every triangle with its neighbours' neighbours in every
 /// step, and self-collision cost 1.6 times the bake. The cone leaves a margin below 90° because
-/// the failsafe reads the detector's patches with positions the response has moved a little.
+/// the paper's response moves the particles a little after the detector found its patches; the
+/// failsafe finds its own, pass by pass.
 ///
 /// Two neighbouring patches (sharing a vertex) whose cones fit together in one cone of 80° are a
 /// height field as one, and their pairs across the seam between them are skipped too: those pairs

@@ -260,6 +260,64 @@ TEST(Failsafe, AMeetingCarriedAlongWithItsNeighbourIsNoMeeting) {
                            velocity.size() * sizeof(Vec3)));
 }
 
+/// Two sheets modelled as near-copies of each other, 13 µm apart (parts of an imported model: a
+/// spider's two shells), are fitted: closer than the skin where the scene starts, so the failsafe
+/// leaves them to give. Within one substep the upper one comes down onto the lower one's plane (as
+/// the ground's lift leaves two stacked faces at one height), or turns against it, one side down
+/// by twice the gap: by less than the separation a fit may give by. Either way they would end
+/// intersecting; they must not.
+TEST(Failsafe, FittedNearCopiesThatMeetWithinTheFitEndApart) {
+  constexpr float kGap = 13e-6f;
+  for (const bool turn : {false, true}) {
+    SCOPED_TRACE(turn ? "turned against the lower sheet" : "onto the lower sheet's plane");
+    SceneSetup setup = noGravity();
+    setup.bodies = {sheet(Vec3f(0, 0, 0), 0.6f, 6), sheet(Vec3f(0.031f, kGap, 0.017f), 0.6f, 6)};
+    setup.bodies[1].name = "copy";
+    Substep step(setup, {Vec3(0, 0, 0), Vec3(0, turn ? 0 : -kGap, 0)});
+    const Body& copy = step.scene.topology.bodies[1];
+    for (Index p = copy.firstParticle; turn && p < copy.firstParticle + copy.particleCount; ++p) {
+      const Scalar down = 2 * kGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
+      step.scene.state.position[p].y() -= down;
+      step.scene.state.velocity[p].y() = -down / Scalar(kDt);
+    }
+    ASSERT_EQ(
+        test::countIntersectingPairs(step.scene.collision, step.scene.substepStart).betweenSurfaces,
+        0u);
+    ASSERT_GT(step.intersections().betweenSurfaces, 0u) << "left alone, the sheets would meet";
+    const Vec3d before = step.momentum();
+    const FailsafeStats stats = step.apply();
+    EXPECT_GT(stats.zoneParticles, 0u);
+    EXPECT_EQ(stats.frozen, 0u);
+    EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+    EXPECT_LT((step.momentum() - before).norm(), 1e-6 * step.momentumScale() + 1e-12);
+  }
+}
+
+/// The detector culls a sheet's pairs within its flat patches by their normals over the substep it
+/// measured. A fold made after that (by the response, by the failsafe's own impulses and zones)
+/// turns some of those patches over: the failsafe must measure flatness on its own motion, or the
+/// fold's triangles cross each other unseen.
+TEST(Failsafe, AFoldMadeAfterTheDetectorFoundItsPatchesFlatStillCannotCrossItself) {
+  SceneSetup setup = noGravity();
+  setup.bodies = {sheet(Vec3f(0, 0, 0), 1.2f, 12)};
+  setup.bodies[0].selfCollision = true;
+  Substep step(setup, {Vec3(0, 0, 0)});
+  test::StagedScene& scene = step.scene;
+  step.detector.detect(scene.topology, scene.collision, {scene.substepStart, scene.substepStart});
+  // A Z-fold across the sheet: the column at x = 0.1 folds back under to x = −0.15, and the one
+  // at x = 0.2 rises, so the triangles between them cut up through the flat cells at x ∈ (−0.1, 0).
+  for (Index p = 0; p < Index(scene.state.position.size()); ++p) {
+    Vec3& x = scene.state.position[p];
+    const Vec3 from = x;
+    if (std::abs(from.x() - 0.1f) < 1e-4f) x = Vec3(-0.15f, -0.01f, from.z());
+    if (std::abs(from.x() - 0.2f) < 1e-4f) x.y() = 0.02f;
+    scene.state.velocity[p] = (x - from) / Scalar(kDt);
+  }
+  ASSERT_GT(step.intersections().withinSurfaces, 0u) << "left alone, the fold crosses the sheet";
+  step.apply();
+  EXPECT_EQ(step.intersections().withinSurfaces, 0u);
+}
+
 TEST(Failsafe, AStackPushedIntoTheGroundStaysAboveIt) {
   SceneSetup setup = noGravity();
   setup.planes.push_back(PlaneCollider{});
