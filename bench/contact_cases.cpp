@@ -46,10 +46,20 @@ int main(int argc, char** argv) {
   }
   std::FILE* csv = nullptr;
   int frames = 0;
-  if (argc > 2 && std::strncmp(argv[argc - 1], "--frames=", 9) == 0)
-    frames = std::atoi(argv[--argc] + 9);
-  if (argc > 2 && std::strncmp(argv[argc - 1], "--csv=", 6) == 0) {
-    const char* path = argv[--argc] + 6;
+  // The two flags anywhere after the scene: taken out, the positional arguments close up.
+  const char* csvPath = nullptr;
+  int kept = 2;
+  for (int i = 2; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--frames=", 9) == 0)
+      frames = std::atoi(argv[i] + 9);
+    else if (std::strncmp(argv[i], "--csv=", 6) == 0)
+      csvPath = argv[i] + 6;
+    else
+      argv[kept++] = argv[i];
+  }
+  argc = kept;
+  if (csvPath) {
+    const char* path = csvPath;
     const bool fresh = !std::filesystem::exists(path);
     csv = std::fopen(path, "a");
     if (!csv) {
