@@ -59,11 +59,10 @@ int main(int argc, char** argv) {
   }
   argc = kept;
   if (csvPath) {
-    const char* path = csvPath;
-    const bool fresh = !std::filesystem::exists(path);
-    csv = std::fopen(path, "a");
+    const bool fresh = !std::filesystem::exists(csvPath);
+    csv = std::fopen(csvPath, "a");
     if (!csv) {
-      std::fprintf(stderr, "contact_cases: cannot write %s\n", path);
+      std::fprintf(stderr, "contact_cases: cannot write %s\n", csvPath);
       return 1;
     }
     if (fresh)

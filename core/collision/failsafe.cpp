@@ -340,7 +340,7 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
                               now && !crossingTriangles(geometry, start, impact, Contact::Touching)
                                   ? kCrossing
                                   : kDrop;
-                          if (now) crossingOf_[i] = *now;
+                          if (verdict == kCrossing) crossingOf_[i] = *now;
                         } else if (notClosing(geometry, start, end, impact) ||
                                    crossingTriangles(geometry, start, impact, Contact::Crossing)) {
                           verdict = kDrop;
@@ -435,13 +435,13 @@ std::optional<TrianglePair> CollisionFailsafe::crossingTriangles(const Collision
     if (geometry.trianglesCross(at, t, u, hits)) return true;
     if (contact == Contact::Crossing) return false;
     // Triangles that share a corner touch there by construction.
-    for (Index v : geometry.triangleVertices[t])
-      if (hasVertex(geometry.triangleVertices[u], v)) return false;
+    if (geometry.shareVertex(t, u)) return false;
+    const TriangleCorners first = geometry.corners(at, t), second = geometry.corners(at, u);
     std::array<Vec3d, 3> a, b;
     double extent = 0;
     for (int k = 0; k < 3; ++k) {
-      a[k] = geometry.vertex(at, geometry.triangleVertices[t][k]).cast<double>();
-      b[k] = geometry.vertex(at, geometry.triangleVertices[u][k]).cast<double>();
+      a[k] = first[k].cast<double>();
+      b[k] = second[k].cast<double>();
       extent = std::max({extent, a[k].cwiseAbs().maxCoeff(), b[k].cwiseAbs().maxCoeff()});
     }
     return triangleDistance(a, b) <= kTouchingOfExtent * extent;

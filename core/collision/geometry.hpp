@@ -50,9 +50,14 @@ struct CollisionGeometry {
   /// share a vertex touch there by construction: that is the mesh, not a crossing.
   bool trianglesCross(std::span<const Vec3> positions, Index t, Index u,
                       TrianglePairHits& hits) const {
-    for (Index v : triangleVertices[u])
-      if (hasVertex(triangleVertices[t], v)) return false;
+    if (shareVertex(t, u)) return false;
     return intersectTrianglePair(corners(positions, t), corners(positions, u), hits);
+  }
+  /// Whether collision triangles t and u have a vertex in common.
+  bool shareVertex(Index t, Index u) const {
+    for (Index v : triangleVertices[u])
+      if (hasVertex(triangleVertices[t], v)) return true;
+    return false;
   }
   /// What a broad phase reads, with this substep's `triangleBox` (one per collision triangle) and,
   /// for normal-cone culling, which patches are flat (updateFlatPatches; none culls nothing).
