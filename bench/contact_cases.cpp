@@ -18,7 +18,8 @@
 // New pairs: the intersecting triangle pairs of a frame that did not intersect at the start (what
 // the scene placed overlapping is set aside, and its pairs may slide), and of those the ones
 // between two surfaces, or within one, that had no intersecting pair at all at the start: a
-// crossing where nothing overlapped.
+// crossing where nothing overlapped. The csv gives how deep the deepest of those reaches
+// (test::penetrationDepth: how far one triangle must move to part them, scene units).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
     if (fresh)
       std::fprintf(csv,
                    "scene,variant,frame,between,within,contacts_per_substep,energy_above,"
-                   "new_pairs,new_where_none\n");
+                   "new_pairs,new_where_none,deepest_new_where_none\n");
   }
   try {
     // A mesh file is the scene `softbake run FILE` makes of it.
@@ -122,12 +123,18 @@ int main(int argc, char** argv) {
       checkSeconds +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - checkStart).count();
       std::size_t newPairs = 0, newWhereNone = 0;
+      double deepest = 0;
       const std::vector<Index>& surfaceOf = simulator.collision().triangleSurface;
       for (const auto& pair : count.pairs) {
         if (std::binary_search(atStart.pairs.begin(), atStart.pairs.end(), pair)) continue;
         ++newPairs;
         const Index a = surfaceOf[pair.first], b = surfaceOf[pair.second];
-        newWhereNone += !atStart.bySurfaces.count({std::min(a, b), std::max(a, b)});
+        if (atStart.bySurfaces.count({std::min(a, b), std::max(a, b)})) continue;
+        ++newWhereNone;
+        const CollisionGeometry& geometry = simulator.collision();
+        const std::span<const Vec3> at = simulator.state().position;
+        deepest = std::max(deepest, test::penetrationDepth(geometry.corners(at, pair.first),
+                                                           geometry.corners(at, pair.second)));
       }
       worstNew = std::max(worstNew, newPairs);
       worstNewWhereNone = std::max(worstNewWhereNone, newWhereNone);
@@ -139,11 +146,11 @@ int main(int argc, char** argv) {
       highest = std::max(highest, energy);
       if (csv)
         std::fprintf(
-            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu\n",
+            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g\n",
             std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(), frame,
             count.betweenSurfaces, count.withinSurfaces,
             double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
-            energy - start, newPairs, newWhereNone);
+            energy - start, newPairs, newWhereNone, deepest);
       // Each frame's row as it is made: a long bake cut short by a time limit keeps its frames.
       if (csv) std::fflush(csv);
     }

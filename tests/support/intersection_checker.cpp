@@ -5,6 +5,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -62,6 +65,47 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
   }
   std::sort(result.pairs.begin(), result.pairs.end());
   return result;
+}
+
+double penetrationDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  std::array<Vec3d, 3> p, q;
+  for (int k = 0; k < 3; ++k) {
+    p[k] = a[k].cast<double>();
+    q[k] = b[k].cast<double>();
+  }
+  double depth = std::numeric_limits<double>::infinity();
+  const auto along = [&](const Vec3d& axis) {
+    const double length = axis.norm();
+    if (!(length > 0)) return;
+    double lowP = std::numeric_limits<double>::infinity(), highP = -lowP, lowQ = lowP,
+           highQ = -lowP;
+    for (int k = 0; k < 3; ++k) {
+      const double x = axis.dot(p[k]) / length, y = axis.dot(q[k]) / length;
+      lowP = std::min(lowP, x);
+      highP = std::max(highP, x);
+      lowQ = std::min(lowQ, y);
+      highQ = std::max(highQ, y);
+    }
+    depth = std::min(depth, std::min(highP - lowQ, highQ - lowP));
+  };
+  const Vec3d normalP = (p[1] - p[0]).cross(p[2] - p[0]);
+  const Vec3d normalQ = (q[1] - q[0]).cross(q[2] - q[0]);
+  along(normalP);
+  along(normalQ);
+  // Within each plane, across each edge: what parts triangles in one plane (faces fitted flat
+  // onto each other), where every cross product of edges is the shared normal.
+  for (int k = 0; k < 3; ++k) {
+    along(normalP.cross(p[(k + 1) % 3] - p[k]));
+    along(normalQ.cross(q[(k + 1) % 3] - q[k]));
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const Vec3d e = p[(i + 1) % 3] - p[i], f = q[(j + 1) % 3] - q[j];
+      const Vec3d axis = e.cross(f);
+      // Nearly parallel edges: their cross product is all rounding, and the normals cover them.
+      if (axis.norm() > 1e-9 * e.norm() * f.norm()) along(axis);
+    }
+  return std::isfinite(depth) ? std::max(depth, 0.0) : 0.0;
 }
 
 }  // namespace softbake::test

@@ -16,6 +16,7 @@
 ///   one touch there by construction; a fold across a shared edge or vertex is not counted).
 /// Zero-area triangles are skipped: they have no inside to cross.
 
+#include <array>
 #include <cstddef>
 #include <map>
 #include <span>
@@ -40,5 +41,13 @@ struct IntersectionCount {
 /// Counts the intersecting triangle pairs of `geometry` with its particles at `positions`.
 IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
                                          std::span<const Vec3> positions);
+
+/// How far one of two triangles must move to part them (their penetration depth), in double: the
+/// least overlap of their projections onto their separating axes (both normals, the cross
+/// products of their edges, and each edge's normal within its plane), which for two convex
+/// polygons is the least over every direction. 0 for triangles apart. How deep a crossing is,
+/// where which side of a plane is which says nothing: faces fitted onto each other at a slight
+/// angle cross each other's planes far from where they meet.
+double penetrationDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
 
 }  // namespace softbake::test
