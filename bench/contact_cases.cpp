@@ -18,8 +18,9 @@
 // New pairs: the intersecting triangle pairs of a frame that did not intersect at the start (what
 // the scene placed overlapping is set aside, and its pairs may slide), and of those the ones
 // between two surfaces, or within one, that had no intersecting pair at all at the start: a
-// crossing where nothing overlapped. The csv gives how deep the deepest of those reaches
-// (test::penetrationDepth: how far one triangle must move to part them, scene units).
+// crossing where nothing overlapped. The row and the csv give how deep the deepest of those reaches
+// (test::penetrationDepth: how far one triangle must move to part them; the row in µm, the csv
+// in scene units).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -94,6 +95,7 @@ int main(int argc, char** argv) {
     const test::IntersectionCount atStart =
         test::countIntersectingPairs(simulator.collision(), simulator.state().position);
     std::size_t worstNew = 0, worstNewWhereNone = 0;
+    double deepestNewWhereNone = 0;
     double highest = start, responseSeconds = 0;
     std::size_t worstBetween = 0, worstWithin = 0, framesBetween = 0, framesWithin = 0;
     std::size_t contacts = 0, substeps = 0;
@@ -138,6 +140,7 @@ int main(int argc, char** argv) {
       }
       worstNew = std::max(worstNew, newPairs);
       worstNewWhereNone = std::max(worstNewWhereNone, newWhereNone);
+      deepestNewWhereNone = std::max(deepestNewWhereNone, deepest);
       worstBetween = std::max(worstBetween, count.betweenSurfaces);
       worstWithin = std::max(worstWithin, count.withinSurfaces);
       framesBetween += count.betweenSurfaces > 0;
@@ -162,7 +165,7 @@ int main(int argc, char** argv) {
     for (const Body& body : simulator.topology().bodies) triangles += body.triangleCount;
     std::printf(
         "| %s | %s | %zu | %zu | %s | %zu (%zu frames) | %zu (%zu frames) | %.0f | %.3f | %.2f | "
-        "%.1f | %.2f | %zu | %zu |\n",
+        "%.1f | %.2f | %zu | %zu | %.2f |\n",
         std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(),
         simulator.topology().bodies.size(), triangles,
         failure.empty() ? std::to_string(reached).c_str()
@@ -171,7 +174,7 @@ int main(int argc, char** argv) {
         substeps ? double(contacts) / double(substeps) : 0.0,
         substeps ? 1e3 * responseSeconds / double(substeps) : 0.0, highest - start,
         double(reached - 1) / wall, reached > 1 ? double(substeps) / double(reached - 1) : 0.0,
-        worstNew, worstNewWhereNone);
+        worstNew, worstNewWhereNone, 1e6 * deepestNewWhereNone);
     return 0;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "contact_cases: %s\n", error.what());

@@ -25,8 +25,8 @@ files=(
 )
 echo "contact_cases FILE implicit set_aside failsafe instep --frames=$frames, $(nproc) cores, $(git -C "$root" rev-parse --short HEAD)"
 echo
-printf '| file | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s | substeps/frame | new pairs, max | new where none overlapped, max |\n'
-printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n'
+printf '| file | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s | substeps/frame | new pairs, max | new where none overlapped, max | the deepest of those, µm |\n'
+printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n'
 for file in "${files[@]}"; do
   row=$("$build/bench/contact_cases" "$corpus/$file" implicit set_aside failsafe instep \
     "--frames=$frames" 2>&1 | tail -1) || row="| $(basename "$file") | failed: $row |"
