@@ -126,15 +126,15 @@ int main(int argc, char** argv) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - checkStart).count();
       std::size_t newPairs = 0, newWhereNone = 0;
       double deepest = 0;
-      const std::vector<Index>& surfaceOf = simulator.collision().triangleSurface;
+      const CollisionGeometry& geometry = simulator.collision();
+      const std::span<const Vec3> at = simulator.state().position;
       for (const auto& pair : count.pairs) {
         if (std::binary_search(atStart.pairs.begin(), atStart.pairs.end(), pair)) continue;
         ++newPairs;
-        const Index a = surfaceOf[pair.first], b = surfaceOf[pair.second];
+        const Index a = geometry.triangleSurface[pair.first];
+        const Index b = geometry.triangleSurface[pair.second];
         if (atStart.bySurfaces.count({std::min(a, b), std::max(a, b)})) continue;
         ++newWhereNone;
-        const CollisionGeometry& geometry = simulator.collision();
-        const std::span<const Vec3> at = simulator.state().position;
         deepest = std::max(deepest, test::penetrationDepth(geometry.corners(at, pair.first),
                                                            geometry.corners(at, pair.second)));
       }

@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -86,14 +85,14 @@ TEST(IntersectionChecker, ZeroAreaTrianglesAreSkipped) {
   EXPECT_EQ(countIntersectingPairs(geometry, positions).total(), 0u);
 }
 
-bool referenceIntersects(const std::array<Vec3, 3>& first, const std::array<Vec3, 3>& second) {
+bool referenceIntersects(const TriangleCorners& first, const TriangleCorners& second) {
   return trianglesIntersect(toDouble(first), toDouble(second));
 }
 
 /// The least overlap of the two triangles' projections over `directions` unit vectors spread
 /// over the sphere (a Fibonacci lattice): an upper bound on the penetration depth that closes on it
 /// as the directions grow dense, found without knowing which axes matter.
-double bruteForceDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b, int directions) {
+double bruteForceDepth(const TriangleCorners& a, const TriangleCorners& b, int directions) {
   double depth = std::numeric_limits<double>::infinity();
   const double golden = std::acos(-1.0) * (3 - std::sqrt(5.0));
   for (int i = 0; i < directions; ++i) {
@@ -112,13 +111,13 @@ double bruteForceDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& 
 }
 
 TEST(PenetrationDepth, AStandingTriangleThroughAFloorPartsByItsShorterWayOut) {
-  const std::array<Vec3, 3> kFloor = {Vec3(0, 0, 0), Vec3(8, 0, 0), Vec3(0, 8, 0)};
+  const TriangleCorners kFloor = {Vec3(0, 0, 0), Vec3(8, 0, 0), Vec3(0, 8, 0)};
   // Through the floor from z = −1 to z = 4: up by 1 parts them.
-  const std::array<Vec3, 3> standing = {Vec3(2, 2, -1), Vec3(2, 4, 4), Vec3(2, 2, 4)};
+  const TriangleCorners standing = {Vec3(2, 2, -1), Vec3(2, 4, 4), Vec3(2, 2, 4)};
   EXPECT_NEAR(penetrationDepth(kFloor, standing), 1.0, 1e-12);
   EXPECT_NEAR(penetrationDepth(standing, kFloor), 1.0, 1e-12);
   // Lifted clear of the floor: apart.
-  const std::array<Vec3, 3> lifted = {Vec3(2, 2, 1), Vec3(2, 4, 4), Vec3(2, 2, 4)};
+  const TriangleCorners lifted = {Vec3(2, 2, 1), Vec3(2, 4, 4), Vec3(2, 2, 4)};
   EXPECT_EQ(penetrationDepth(kFloor, lifted), 0.0);
 }
 
@@ -127,9 +126,9 @@ TEST(PenetrationDepth, FacesAtASlightAngleThatBarelyOverlapAreBarelyDeep) {
   // and 0.069 of the unit floor), but their planes meet just inside the floor's hypotenuse: a
   // nudge of about a thousandth parts them. Faces of an assembly fitted at a slight angle cross
   // so by rounding; a depth by the planes alone took them for 0.15 mm deep.
-  const std::array<Vec3, 3> floor = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
-  const std::array<Vec3, 3> tilted = {Vec3(0, 0.6f, -0.07f), Vec3(1, 0.398f, 0.07f),
-                                      Vec3(1, 0.8f, 0.07f)};
+  const TriangleCorners floor = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const TriangleCorners tilted = {Vec3(0, 0.6f, -0.07f), Vec3(1, 0.398f, 0.07f),
+                                  Vec3(1, 0.8f, 0.07f)};
   ASSERT_TRUE(referenceIntersects(floor, tilted));
   const double depth = penetrationDepth(floor, tilted);
   EXPECT_GT(depth, 0.0);
@@ -141,7 +140,7 @@ TEST(PenetrationDepth, AgreesWithADenseSearchOverDirectionsOnRandomPairs) {
   std::uniform_real_distribution<float> coordinate(-1, 1);
   int crossing = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    std::array<Vec3, 3> a, b;
+    TriangleCorners a, b;
     for (Vec3& p : a) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
     for (Vec3& p : b) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
     const double depth = penetrationDepth(a, b);

@@ -67,7 +67,7 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
   return result;
 }
 
-double penetrationDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b) {
   std::array<Vec3d, 3> p, q;
   for (int k = 0; k < 3; ++k) {
     p[k] = a[k].cast<double>();

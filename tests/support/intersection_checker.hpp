@@ -16,7 +16,6 @@
 ///   one touch there by construction; a fold across a shared edge or vertex is not counted).
 /// Zero-area triangles are skipped: they have no inside to cross.
 
-#include <array>
 #include <cstddef>
 #include <map>
 #include <span>
@@ -24,6 +23,7 @@
 #include <vector>
 
 #include "core/collision/geometry.hpp"
+#include "core/collision/triangle_pair_intersection.hpp"
 #include "core/types.hpp"
 
 namespace softbake::test {
@@ -48,6 +48,6 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
 /// polygons is the least over every direction. 0 for triangles apart. How deep a crossing is,
 /// where which side of a plane is which says nothing: faces fitted onto each other at a slight
 /// angle cross each other's planes far from where they meet.
-double penetrationDepth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b);
 
 }  // namespace softbake::test
