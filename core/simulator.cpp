@@ -38,8 +38,10 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   const bool setAside = collisions.initialOverlap == InitialOverlapMode::SetAside;
   initialOverlaps_ = findInitialOverlaps(*topology_, collision_, state_.position,
                                          setAside ? fittedDistance() : Scalar(0));
-  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None)
+  if (collides_ && collisions.failsafe && collisions.response != ResponseMode::None) {
     failsafe_.emplace(*topology_, collision_);
+    failsafe_->leaveOverlapping(initialOverlaps_);
+  }
   if (collides_ && collisions.contactsInStep && collisions.response != ResponseMode::None &&
       stepper_->keepsContactsApart())
     stepContacts_.emplace(*topology_, collision_);

@@ -152,6 +152,26 @@ void CollisionFailsafe::leaveTangled(const InitialOverlaps& overlaps) {
     tangled_.emplace_back(overlap.firstSurface, overlap.secondSurface);
 }
 
+void CollisionFailsafe::leaveOverlapping(const InitialOverlaps& overlaps) {
+  overlapping_.clear();
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
+    overlapping_.emplace_back(overlap.firstSurface, overlap.secondSurface);
+  std::sort(overlapping_.begin(), overlapping_.end());
+}
+
+bool CollisionFailsafe::betweenOverlapping(const CollisionGeometry& geometry,
+                                           const FailsafeImpact& impact) const {
+  // Every triangle around a collision vertex lies on the vertex's surface.
+  const auto surface = [&](Index v) {
+    return geometry.triangleSurface[vertexTriangles_[vertexTriangleStart_[v]]];
+  };
+  const Index first = surface(impact.vertex[0]);
+  const Index second =
+      impact.edge ? surface(impact.vertex[2]) : geometry.triangleSurface[impact.face];
+  return std::binary_search(overlapping_.begin(), overlapping_.end(),
+                            std::pair{std::min(first, second), std::max(first, second)});
+}
+
 FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
                                        const CollisionGeometry& geometry,
                                        CollisionDetector& detector, std::span<const Vec3> start,
@@ -327,27 +347,28 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
   enum Verdict : std::uint8_t { kKeep, kDrop, kCrossing };
   verdicts_.resize(impacts_.size());
   crossingOf_.resize(impacts_.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, impacts_.size(), 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const FailsafeImpact& impact = impacts_[i];
-                        Verdict verdict = kKeep;
-                        if (closeAtRest(topology, geometry, impact) &&
-                            !crosses(geometry, start, end, impact, impact.separation)) {
-                          const std::optional<TrianglePair> now =
-                              crossingTriangles(geometry, end, impact, Contact::Touching);
-                          verdict =
-                              now && !crossingTriangles(geometry, start, impact, Contact::Touching)
-                                  ? kCrossing
-                                  : kDrop;
-                          if (verdict == kCrossing) crossingOf_[i] = *now;
-                        } else if (notClosing(geometry, start, end, impact) ||
-                                   crossingTriangles(geometry, start, impact, Contact::Crossing)) {
-                          verdict = kDrop;
-                        }
-                        verdicts_[i] = verdict;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, impacts_.size(), 16),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const FailsafeImpact& impact = impacts_[i];
+          Verdict verdict = kKeep;
+          const bool fitted = closeAtRest(topology, geometry, impact);
+          if (fitted && !crosses(geometry, start, end, impact, impact.separation)) {
+            const std::optional<TrianglePair> now =
+                crossingTriangles(geometry, end, impact, Contact::Touching);
+            verdict = now && !crossingTriangles(geometry, start, impact, Contact::Touching)
+                          ? kCrossing
+                          : kDrop;
+            if (verdict == kCrossing) crossingOf_[i] = *now;
+          } else if (notClosing(geometry, start, end, impact) ||
+                     ((fitted || betweenOverlapping(geometry, impact)) &&
+                      crossingTriangles(geometry, start, impact, Contact::Crossing))) {
+            verdict = kDrop;
+          }
+          verdicts_[i] = verdict;
+        }
+      });
   crossings_.clear();
   std::size_t kept = 0;
   for (std::size_t i = 0; i < impacts_.size(); ++i) {

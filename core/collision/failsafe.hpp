@@ -51,7 +51,10 @@
 /// while any are left, and the detangler (core/collision/detangle.hpp) or the paper's response
 /// separates them (initial_overlap "separate", over the first frames); from the frame they are
 /// found apart, this stage holds them apart. A meeting
-/// whose own triangles intersected at its start is left alone too, and surfaces ignored under
+/// whose own triangles intersected at its start is left alone too, when its surfaces overlapped in
+/// the scene's initial state or it is fitted (an overlap set aside slides out of itself by such
+/// meetings); between any other surfaces that crossing is a miss, and leaving its meetings alone
+/// let it deepen substep by substep. Surfaces ignored under
 /// "ignore" never meet. Otherwise the same pairs as the detector's, the same eligibility
 /// (self-collision only for surfaces that have it on).
 ///
@@ -142,6 +145,12 @@ class CollisionFailsafe {
   void leaveTangled(const InitialOverlaps& overlaps);
   bool anyTangled() const { return !tangled_.empty(); }
 
+  /// The surfaces (pairs, or one with itself) that intersected in the scene's initial state. Only
+  /// between those may a meeting whose triangles already intersect where its substep starts be
+  /// left alone (so that an overlap set aside may slide out of itself); between any others such a
+  /// crossing is a miss, and leaving its meetings alone let it deepen substep by substep.
+  void leaveOverlapping(const InitialOverlaps& overlaps);
+
   /// Distance two meeting primitives are left apart, scene units.
   double separation() const { return separation_; }
   /// Distance within which two primitives meet.
@@ -165,6 +174,8 @@ class CollisionFailsafe {
   /// than it were made that close.
   bool closeAtRest(const SceneTopology& topology, const CollisionGeometry& geometry,
                    const FailsafeImpact& impact) const;
+  /// Whether the meeting's two surfaces intersected in the scene's initial state.
+  bool betweenOverlapping(const CollisionGeometry& geometry, const FailsafeImpact& impact) const;
   /// Whether the meeting's first primitive ends the substep more than `tolerance` on the other
   /// side of the second.
   static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
@@ -196,7 +207,8 @@ class CollisionFailsafe {
   PairCache pairCache_;  ///< only when the detector keeps none
   std::vector<TrianglePair> pairs_;
   PatchFlatness patchFlat_;  ///< the self-collision patches that are flat over this pass
-  std::vector<std::pair<Index, Index>> tangled_;  ///< surface pairs, sorted
+  std::vector<std::pair<Index, Index>> tangled_;      ///< surface pairs, sorted
+  std::vector<std::pair<Index, Index>> overlapping_;  ///< surface pairs, sorted
   /// Per collision triangle: bit k set when it owns its corner k, bit 3 + k its edge k → k+1. A
   /// vertex or an edge is tested from the lowest-numbered triangle that holds it, once per pair
   /// of surfaces (the triangles around it all pair with the same ones).
