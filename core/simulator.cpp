@@ -112,8 +112,7 @@ void Simulator::step(int frame) {
       tangled = detangler_->movedPairs();
     }
     const CollisionResponseStats responses = respondToCollisions(
-        topology, collision_, detector_, response, state_, contacts_, edgePushes_, tangled,
-        stepContacts_ ? std::span<const Vec3>(substepStart_) : std::span<const Vec3>());
+        topology, collision_, detector_, response, state_, contacts_, edgePushes_, tangled);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();

@@ -19,7 +19,6 @@ struct ResponseScene {
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
   std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
-  std::span<const Vec3> start;  ///< particles where the substep started; empty: not known
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
   bool leftAlone(Index surfaceA, Index surfaceB) const {
     return !leaveAlone.empty() && std::binary_search(leaveAlone.begin(), leaveAlone.end(),
@@ -216,18 +215,6 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
     // responses and the earlier passes), so an end that an earlier pass pushed out is left alone.
     const EdgeEndsInside inside = findEdgeEndsInside(geometry, scene.state.position, edge);
     if (inside.count == 0) continue;
-    // Behind the face's plane is inside the surface only near the face: a particle under a
-    // resting block lies behind the plane of the block's side face too, centimetres deep, and
-    // pushed out along that face's normal it slid the block sideways frame after frame. An end
-    // that crossed in this substep was in front of the plane where the substep started.
-    const auto behindAtStart = [&](Index end) {
-      if (scene.start.empty()) return false;
-      const TriangleCorners face = geometry.corners(scene.start, edge.triangle);
-      const Vec3 normal = (face[1] - face[0]).cross(face[2] - face[0]);
-      const Vec3 facePoint = edge.hit.barycentric[0] * face[0] + edge.hit.barycentric[1] * face[1] +
-                             edge.hit.barycentric[2] * face[2];
-      return normal.dot(geometry.vertex(scene.start, end) - facePoint) < 0;
-    };
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
     const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
@@ -236,7 +223,6 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
             .norm();
     const Scalar maxPush = kMaxEdgePush * edgeLength;
     for (int k = 0; k < inside.count; ++k) {
-      if (behindAtStart(inside.end[k])) continue;
       if (!computeCorrection(scene, inside.end[k], struck,
                              std::min(scene.skin + inside.depth[k], maxPush) * inside.normal,
                              inside.normal, geometry.restitution[surfaceB],
@@ -300,10 +286,8 @@ CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
                                            EdgePushes& edgePushes,
-                                           std::span<const std::pair<Index, Index>> leaveAlone,
-                                           std::span<const Vec3> substepStart) {
-  const ResponseScene scene{topology,   state,       geometry, topology.settings.skin,
-                            leaveAlone, substepStart};
+                                           std::span<const std::pair<Index, Index>> leaveAlone) {
+  const ResponseScene scene{topology, state, geometry, topology.settings.skin, leaveAlone};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

@@ -126,16 +126,11 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
 /// Writes this substep's contacts to `contacts` (replacing what was there) and, unless `mode` is
 /// ResponseMode::None, moves the particles and sets their velocities as described above. Contacts
 /// between the surface pairs of `leaveAlone` (sorted, lower surface first) are recorded but not
-/// responded to: surfaces that start inside each other, which the Detangler takes apart. With
-/// `substepStart` (the particles where the substep started; the simulator gives it where the
-/// contacts are kept in the step, so the paper's explicit method stays as published), an edge end
-/// is pushed only where it crossed the face's plane within the substep.
-CollisionResponseStats respondToCollisions(const SceneTopology& topology,
-                                           const CollisionGeometry& geometry,
-                                           const CollisionDetector& detector, ResponseMode mode,
-                                           SimulationState& state, std::vector<Contact>& contacts,
-                                           EdgePushes& edgePushes,
-                                           std::span<const std::pair<Index, Index>> leaveAlone = {},
-                                           std::span<const Vec3> substepStart = {});
+/// responded to: surfaces that start inside each other, which the Detangler takes apart.
+CollisionResponseStats respondToCollisions(
+    const SceneTopology& topology, const CollisionGeometry& geometry,
+    const CollisionDetector& detector, ResponseMode mode, SimulationState& state,
+    std::vector<Contact>& contacts, EdgePushes& edgePushes,
+    std::span<const std::pair<Index, Index>> leaveAlone = {});
 
 }  // namespace softbake
