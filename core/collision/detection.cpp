@@ -160,9 +160,7 @@ CollisionDetector::CollisionDetector(const CollisionSettings& settings)
 }
 
 void CollisionDetector::ignoreOverlaps(const InitialOverlaps& overlaps) {
-  ignoredSurfaces_.clear();
-  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
-    ignoredSurfaces_.emplace_back(overlap.firstSurface, overlap.secondSurface);
+  ignoredSurfaces_ = overlappingSurfaces(overlaps);
 }
 
 void CollisionDetector::dropIgnoredPairs(const CollisionGeometry& geometry,

@@ -147,16 +147,11 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
 }
 
 void CollisionFailsafe::leaveTangled(const InitialOverlaps& overlaps) {
-  tangled_.clear();
-  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
-    tangled_.emplace_back(overlap.firstSurface, overlap.secondSurface);
+  tangled_ = overlappingSurfaces(overlaps);
 }
 
 void CollisionFailsafe::leaveOverlapping(const InitialOverlaps& overlaps) {
-  overlapping_.clear();
-  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
-    overlapping_.emplace_back(overlap.firstSurface, overlap.secondSurface);
-  std::sort(overlapping_.begin(), overlapping_.end());
+  overlapping_ = overlappingSurfaces(overlaps);
 }
 
 bool CollisionFailsafe::betweenOverlapping(const CollisionGeometry& geometry,

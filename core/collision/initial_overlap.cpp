@@ -32,6 +32,14 @@ void keepPairs(std::span<const TrianglePair> from, std::vector<TrianglePair>& ou
 }
 }  // namespace
 
+std::vector<std::pair<Index, Index>> overlappingSurfaces(const InitialOverlaps& overlaps) {
+  std::vector<std::pair<Index, Index>> surfaces;
+  surfaces.reserve(overlaps.bySurfaces.size());
+  for (const SurfaceOverlap& overlap : overlaps.bySurfaces)
+    surfaces.emplace_back(overlap.firstSurface, overlap.secondSurface);
+  return surfaces;
+}
+
 InitialOverlaps findInitialOverlaps(const SceneTopology& topology,
                                     const CollisionGeometry& geometry,
                                     std::span<const Vec3> positions, Scalar closeDistance) {

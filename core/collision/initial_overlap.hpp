@@ -30,6 +30,7 @@
 
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/broad_phase/broad_phase.hpp"
@@ -54,6 +55,10 @@ struct InitialOverlaps {
   std::vector<TrianglePair> close;
   bool empty() const { return pairs.empty(); }
 };
+
+/// The surface pairs of `overlaps.bySurfaces`, lower surface first, in its order (sorted): what
+/// dropSurfacePairs() and a binary search read.
+std::vector<std::pair<Index, Index>> overlappingSurfaces(const InitialOverlaps& overlaps);
 
 /// The triangle pairs of `topology` that intersect with its particles at `positions`, and those of
 /// different surfaces closer than `closeDistance` (none when it is 0).
