@@ -105,21 +105,13 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   std::vector<Index> vertexOwner(vertices, ~Index(0));
   std::vector<std::pair<std::pair<Index, Index>, Index>> edges;
   edges.reserve(3 * triangles);
-  vertexTriangleStart_.assign(vertices + 1, 0);
   for (Index t = 0; t < triangles; ++t)
     for (int k = 0; k < 3; ++k) {
       const Index a = geometry.triangleVertices[t][k],
                   b = geometry.triangleVertices[t][(k + 1) % 3];
       vertexOwner[a] = std::min(vertexOwner[a], t);
       edges.push_back({{std::min(a, b), std::max(a, b)}, t});
-      ++vertexTriangleStart_[a + 1];
     }
-  std::partial_sum(vertexTriangleStart_.begin(), vertexTriangleStart_.end(),
-                   vertexTriangleStart_.begin());
-  vertexTriangles_.resize(vertexTriangleStart_.back());
-  std::vector<Index> fill(vertexTriangleStart_.begin(), vertexTriangleStart_.end() - 1);
-  for (Index t = 0; t < triangles; ++t)
-    for (Index v : geometry.triangleVertices[t]) vertexTriangles_[fill[v]++] = t;
   std::sort(edges.begin(), edges.end());
   owns_.assign(triangles, 0);
   for (Index t = 0; t < triangles; ++t)
@@ -158,7 +150,7 @@ bool CollisionFailsafe::betweenOverlapping(const CollisionGeometry& geometry,
                                            const FailsafeImpact& impact) const {
   // Every triangle around a collision vertex lies on the vertex's surface.
   const auto surface = [&](Index v) {
-    return geometry.triangleSurface[vertexTriangles_[vertexTriangleStart_[v]]];
+    return geometry.triangleSurface[geometry.trianglesAround(v).front()];
   };
   const Index first = surface(impact.vertex[0]);
   const Index second =
@@ -448,10 +440,7 @@ std::optional<TrianglePair> CollisionFailsafe::crossingTriangles(const Collision
                                                                  std::span<const Vec3> at,
                                                                  const FailsafeImpact& impact,
                                                                  Contact contact) const {
-  const auto around = [&](Index v) {
-    return std::span(vertexTriangles_)
-        .subspan(vertexTriangleStart_[v], vertexTriangleStart_[v + 1] - vertexTriangleStart_[v]);
-  };
+  const auto around = [&](Index v) { return geometry.trianglesAround(v); };
   TrianglePairHits hits;
   // Touching counts: faces of two surfaces pressed onto one plane (stacked near-copies lifted
   // to the same height above the ground) overlap there, which the line–triangle test, blind to

@@ -216,7 +216,6 @@ class CollisionFailsafe {
   /// vertex or an edge is tested from the lowest-numbered triangle that holds it, once per pair
   /// of surfaces (the triangles around it all pair with the same ones).
   std::vector<std::uint8_t> owns_;
-  std::vector<Index> vertexTriangleStart_, vertexTriangles_;  ///< collision vertex → triangles
   ChunkBuffers<FailsafeImpact> chunkImpacts_;
   std::vector<FailsafeImpact> impacts_;
   /// Triangle pairs of fitted meetings that intersect where the substep ends but did not where it

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numeric>
 
 #include "core/parallel.hpp"
 #include "core/scene/scene_topology.hpp"
@@ -58,7 +59,21 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
   for (std::size_t s = 0; s < topology.staticShapes.size(); ++s)
     addStaticMesh(geometry, topology.staticShapes[s], topology.staticMeshes[s]);
   geometry.selfPatches = buildSelfPatches(geometry);
+  linkVertexTriangles(geometry);
   return geometry;
+}
+
+void linkVertexTriangles(CollisionGeometry& geometry) {
+  const std::size_t vertices = geometry.particleCount + geometry.staticVertex.size();
+  std::vector<Index>& start = geometry.vertexTriangleStart;
+  start.assign(vertices + 1, 0);
+  for (const Triangle& t : geometry.triangleVertices)
+    for (Index v : t) ++start[v + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  geometry.vertexTriangles.resize(start.back());
+  std::vector<Index> fill(start.begin(), start.end() - 1);
+  for (Index t = 0; t < geometry.triangleVertices.size(); ++t)
+    for (Index v : geometry.triangleVertices[t]) geometry.vertexTriangles[fill[v]++] = t;
 }
 
 void dropSurfacePairs(const CollisionGeometry& geometry,

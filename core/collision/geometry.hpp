@@ -36,6 +36,10 @@ struct CollisionGeometry {
   Index particleCount = 0;                    ///< first static vertex index
   Index softTriangleCount = 0;                ///< first static triangle index
   SelfPatches selfPatches;                    ///< the self-colliding surfaces cut into patches
+  /// The triangles around each collision vertex: those of vertex v are
+  /// vertexTriangles[vertexTriangleStart[v] .. vertexTriangleStart[v + 1]), all on v's surface
+  /// (linkVertexTriangles; empty until then).
+  std::vector<Index> vertexTriangleStart, vertexTriangles;
 
   /// The position of collision vertex `v`: particle v of `positions`, or a static mesh vertex.
   const Vec3& vertex(std::span<const Vec3> positions, Index v) const {
@@ -52,6 +56,11 @@ struct CollisionGeometry {
                       TrianglePairHits& hits) const {
     if (shareVertex(t, u)) return false;
     return intersectTrianglePair(corners(positions, t), corners(positions, u), hits);
+  }
+  /// The triangles that have `v` as a corner (linkVertexTriangles must have run).
+  std::span<const Index> trianglesAround(Index v) const {
+    return std::span(vertexTriangles)
+        .subspan(vertexTriangleStart[v], vertexTriangleStart[v + 1] - vertexTriangleStart[v]);
   }
   /// Whether collision triangles t and u have a vertex in common.
   bool shareVertex(Index t, Index u) const {
@@ -83,6 +92,9 @@ struct CollisionGeometry {
 void dropSurfacePairs(const CollisionGeometry& geometry,
                       std::span<const std::pair<Index, Index>> surfacePairs,
                       std::vector<TrianglePair>& pairs);
+
+/// Fills `vertexTriangleStart` and `vertexTriangles` from the triangles.
+void linkVertexTriangles(CollisionGeometry& geometry);
 
 /// The collision geometry of the topology's bodies and static shapes (welded by
 /// buildSceneTopology(), so triangles that touch share vertices). Built by the Simulator, which

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
+#include "core/collision/continuous_collision.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -19,6 +21,7 @@ struct ResponseScene {
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
   std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
+  InsideTest inside = InsideTest::StruckFace;           ///< what counts an edge end inside
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
   bool leftAlone(Index surfaceA, Index surfaceB) const {
     return !leaveAlone.empty() && std::binary_search(leaveAlone.begin(), leaveAlone.end(),
@@ -213,7 +216,8 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
     // The end of the edge inside a closed surface: back out through the face's plane, lifted by
     // the skin. Depth is measured on the positions as the pass found them (after the particle
     // responses and the earlier passes), so an end that an earlier pass pushed out is left alone.
-    const EdgeEndsInside inside = findEdgeEndsInside(geometry, scene.state.position, edge);
+    const EdgeEndsInside inside =
+        findEdgeEndsInside(geometry, scene.state.position, edge, scene.inside);
     if (inside.count == 0) continue;
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
@@ -261,7 +265,8 @@ void EdgePushes::apply(SimulationState& state) {
 }
 
 EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
-                                  std::span<const Vec3> positions, const EdgeContact& edge) {
+                                  std::span<const Vec3> positions, const EdgeContact& edge,
+                                  InsideTest test) {
   EdgeEndsInside inside;
   if (!geometry.surfaceClosed[geometry.triangleSurface[edge.triangle]]) return inside;
   const TriangleCorners face = geometry.corners(positions, edge.triangle);
@@ -272,13 +277,39 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
   for (int k = 0; k < 3; ++k) faceSize = std::max(faceSize, (face[(k + 1) % 3] - face[k]).norm());
   const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
   for (Index end : {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]}) {
-    const Vec3 offset = geometry.vertex(positions, end) - inside.facePoint;
+    const Vec3& at = geometry.vertex(positions, end);
+    const Vec3 offset = at - inside.facePoint;
     const Scalar depth = -inside.normal.dot(offset);
     if (depth <= 0 || offset.norm() > faceSize) continue;
+    if (test == InsideTest::NearestFace &&
+        !behindNearestFace(geometry, positions, edge.triangle, at))
+      continue;
     inside.end[inside.count] = end;
     inside.depth[inside.count++] = depth;
   }
   return inside;
+}
+
+bool behindNearestFace(const CollisionGeometry& geometry, std::span<const Vec3> positions,
+                       Index triangle, const Vec3& point) {
+  const Vec3d p = point.cast<double>();
+  double least = std::numeric_limits<double>::infinity();
+  Vec3d nearestCorner = Vec3d::Zero(), nearestNormal = Vec3d::Zero();
+  const auto consider = [&](Index t) {
+    const TriangleCorners c = geometry.corners(positions, t);
+    const Vec3d a = c[0].cast<double>(), b = c[1].cast<double>(), d = c[2].cast<double>();
+    const Vec3d normal = (b - a).cross(d - a);
+    if (normal.squaredNorm() == 0) return;  // a collapsed triangle has no side
+    const double distance = pointTriangleDistance(p, a, b, d);
+    if (distance >= least) return;
+    least = distance;
+    nearestCorner = a;
+    nearestNormal = normal;
+  };
+  consider(triangle);
+  for (Index v : geometry.triangleVertices[triangle])
+    for (Index t : geometry.trianglesAround(v)) consider(t);
+  return nearestNormal.dot(p - nearestCorner) < 0;
 }
 
 CollisionResponseStats respondToCollisions(const SceneTopology& topology,
@@ -286,8 +317,9 @@ CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            const CollisionDetector& detector, ResponseMode mode,
                                            SimulationState& state, std::vector<Contact>& contacts,
                                            EdgePushes& edgePushes,
-                                           std::span<const std::pair<Index, Index>> leaveAlone) {
-  const ResponseScene scene{topology, state, geometry, topology.settings.skin, leaveAlone};
+                                           std::span<const std::pair<Index, Index>> leaveAlone,
+                                           InsideTest inside) {
+  const ResponseScene scene{topology, state, geometry, topology.settings.skin, leaveAlone, inside};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

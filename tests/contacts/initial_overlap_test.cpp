@@ -6,7 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 
+#include "core/collision/continuous_collision.hpp"
+#include "core/collision/response.hpp"
 #include "core/dynamics/energy.hpp"
 #include "core/mesh/icosphere.hpp"
 #include "core/mesh/weld.hpp"
@@ -344,16 +348,12 @@ TEST(InitialOverlap, ABodyThatCrossesItselfIsNeitherBlownUpNorTorn) {
   EXPECT_LT(fastest, 1.0f) << "resting on the ground by now, not thrown";
 }
 
-/// Parts fitted face on face, closer than the skin, as CAD assemblies are: a rubber block resting
-/// on another on the ground, their faces 0.25 skin apart, their meshes not aligned. Every rounding
-/// of the fit is a crossing to the paper's response, which lifts the top block's particles to the
-/// skin each time: it threw the top block off the base within a second, adding 1.4 J (35%) to the
-/// scene's energy. Fitted pairs are left to the failsafe, which keeps them from crossing: the top
-/// block stays on the base and no pair between the blocks intersects on any frame.
-TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
+/// A rubber block resting on another on the ground, `gapInSkins` skins above it, offset 13.7 mm in
+/// x and 21 mm in z, their meshes not aligned.
+SceneSetup blockOnBlock(float gapInSkins) {
   SceneSetup scene;
   scene.planes.push_back(PlaneCollider{});
-  const float gap = 0.25f * scene.settings.skin;
+  const float gap = gapInSkins * scene.settings.skin;
   for (int k = 0; k < 2; ++k) {
     BodySetup body;
     body.name = k == 0 ? "base" : "top";
@@ -363,21 +363,107 @@ TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
     body.material = *findMaterialPreset("rubber");
     scene.bodies.push_back(body);
   }
-  Simulator simulator(buildSceneTopology(scene));
-  const SceneTopology& topology = simulator.topology();
-  ASSERT_TRUE(simulator.initialOverlaps().empty());
-  ASSERT_GT(simulator.fittedPairs().size(), 100u) << "the blocks' faces are fitted";
-  for (int frame = 2; frame <= 24; ++frame) {
+  return scene;
+}
+
+/// The top block's centroid relative to the base's.
+Vec3d topOverBase(const Simulator& simulator) {
+  const std::vector<Body>& bodies = simulator.topology().bodies;
+  return centroid(simulator.state(), bodies[1]) - centroid(simulator.state(), bodies[0]);
+}
+
+/// Runs blockOnBlock() to frame `last`: the top block stays on the base, no pair between the
+/// blocks ever intersects, and it does not creep: its offset from the base's centre changes by
+/// less than `creep`. The paper's edge pushes took a particle under the top block for one inside
+/// it (it lies behind the plane of the block's side face, centimetres deep) and pushed it out
+/// sideways, in every substep: the top block crept 18 cm in 4 s on a fit, 9 cm on an ordinary
+/// contact. InsideTest::NearestFace sees the particle is below the block's bottom face.
+void expectRestingBlockStays(Simulator& simulator, int last, double creep) {
+  const Vec3d start = topOverBase(simulator);
+  for (int frame = 2; frame <= last; ++frame) {
     simulator.advanceToFrame(frame);
     EXPECT_EQ(test::countIntersectingPairs(simulator.collision(), simulator.state().position)
                   .betweenSurfaces,
               0u)
         << "frame " << frame;
-    const Vec3d rise = centroid(simulator.state(), topology.bodies[1]) -
-                       centroid(simulator.state(), topology.bodies[0]);
+    const Vec3d rise = topOverBase(simulator);
     EXPECT_GT(rise.y(), 0.15) << "frame " << frame << ": the top block left the base";
-    EXPECT_LT(std::hypot(rise.x(), rise.z()), 0.05) << "frame " << frame << ": it slid";
+    EXPECT_LT(std::hypot(rise.x() - start.x(), rise.z() - start.z()), creep)
+        << "frame " << frame << ": it crept";
   }
+}
+
+/// Parts fitted face on face, closer than the skin, as CAD assemblies are: the blocks' faces 0.25
+/// skin apart. Every rounding of the fit is a crossing to the paper's response, which lifts the
+/// top block's particles to the skin each time: it threw the top block off the base within a
+/// second, adding 1.4 J (35%) to the scene's energy. Fitted pairs are left to the failsafe, which
+/// keeps them from crossing.
+TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
+  Simulator simulator(buildSceneTopology(blockOnBlock(0.25f)));
+  ASSERT_TRUE(simulator.initialOverlaps().empty());
+  ASSERT_GT(simulator.fittedPairs().size(), 100u) << "the blocks' faces are fitted";
+  // A fit gives, and the give still lets the block creep (9 mm by frame 24, 86 mm by frame 96:
+  // bench/results/contacts.md): this bounds the first second only.
+  expectRestingBlockStays(simulator, 24, 0.025);
+}
+
+/// behindNearestFace() against the block's own inside (|x| < 0.3, |y| < 0.1, |z| < 0.3): a point
+/// the edge pushes would take for inside a face (behind its plane, within the face's longest side
+/// of its centroid) is behind the nearest face whenever it is inside the block, and never when it
+/// is outside and the face nearest it is around the struck face's corners, where the test looks.
+TEST(EdgePushes, AnEndIsInsideOnlyIfTheFaceNearestItHasItBehind) {
+  SceneSetup scene;
+  BodySetup body;
+  body.name = "block";
+  body.mesh = makeBlock(Vec3f::Zero(), Vec3f(0.3f, 0.1f, 0.3f), 3);
+  scene.bodies.push_back(body);
+  const Simulator simulator(buildSceneTopology(scene));
+  const CollisionGeometry& geometry = simulator.collision();
+  const std::span<const Vec3> positions = simulator.state().position;
+  const Index triangles = Index(geometry.triangleVertices.size());
+  const auto toDouble = [](const Vec3& v) { return Vec3d(v.cast<double>()); };
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> across(-0.45f, 0.45f), up(-0.25f, 0.25f);
+  std::size_t inside = 0, outside = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const Vec3 p(across(random), up(random), across(random));
+    const Vec3 clear = Vec3(0.3f, 0.1f, 0.3f) - p.cwiseAbs();
+    if (std::abs(clear.minCoeff()) < 1e-3f) continue;  // on a face: neither side for sure
+    const bool inBlock = clear.minCoeff() > 0;
+    Index nearest = 0;
+    double least = std::numeric_limits<double>::infinity();
+    for (Index t = 0; t < triangles; ++t) {
+      const TriangleCorners c = geometry.corners(positions, t);
+      const double d =
+          pointTriangleDistance(toDouble(p), toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
+      if (d < least) least = d, nearest = t;
+    }
+    for (Index t = 0; t < triangles; ++t) {
+      const TriangleCorners c = geometry.corners(positions, t);
+      const Vec3 normal = (c[1] - c[0]).cross(c[2] - c[0]);
+      Scalar faceSize = 0;
+      for (int k = 0; k < 3; ++k) faceSize = std::max(faceSize, (c[(k + 1) % 3] - c[k]).norm());
+      if (normal.dot(p - c[0]) >= 0 || (p - (c[0] + c[1] + c[2]) / 3).norm() > faceSize) continue;
+      const bool behind = behindNearestFace(geometry, positions, t, p);
+      if (inBlock) {
+        ++inside;
+        EXPECT_TRUE(behind) << "inside at " << p.transpose();
+      } else if (nearest == t || geometry.shareVertex(t, nearest)) {
+        ++outside;
+        EXPECT_FALSE(behind) << "outside at " << p.transpose() << ", struck face " << t;
+      }
+    }
+  }
+  EXPECT_GT(inside, 1000u);
+  EXPECT_GT(outside, 1000u) << "points outside that the struck face's plane alone calls inside";
+}
+
+/// The same blocks three skins apart: an ordinary contact once the top block has settled.
+TEST(InitialOverlap, ABlockRestingOnAnotherDoesNotCreep) {
+  Simulator simulator(buildSceneTopology(blockOnBlock(3.0f)));
+  ASSERT_TRUE(simulator.fittedPairs().empty());
+  // Measured: it settles 0.7 mm aside over the first half second and stays there.
+  expectRestingBlockStays(simulator, 96, 0.002);
 }
 
 /// Fitted faces swap sides by rounding in every substep (they are closer than the skin): a fit
