@@ -4,9 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <numeric>
 
 #include "core/parallel.hpp"
+#include "core/scene/incidence.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -64,16 +64,12 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
 }
 
 void linkVertexTriangles(CollisionGeometry& geometry) {
-  const std::size_t vertices = geometry.particleCount + geometry.staticVertex.size();
-  std::vector<Index>& start = geometry.vertexTriangleStart;
-  start.assign(vertices + 1, 0);
-  for (const Triangle& t : geometry.triangleVertices)
-    for (Index v : t) ++start[v + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  geometry.vertexTriangles.resize(start.back());
-  std::vector<Index> fill(start.begin(), start.end() - 1);
-  for (Index t = 0; t < geometry.triangleVertices.size(); ++t)
-    for (Index v : geometry.triangleVertices[t]) geometry.vertexTriangles[fill[v]++] = t;
+  buildIncidence(
+      geometry.particleCount + geometry.staticVertex.size(), geometry.triangleVertices.size(),
+      [&](std::size_t t, auto emit) {
+        for (Index v : geometry.triangleVertices[t]) emit(v, Index(t));
+      },
+      geometry.vertexTriangleStart, geometry.vertexTriangles);
 }
 
 void dropSurfacePairs(const CollisionGeometry& geometry,

@@ -7,6 +7,7 @@
 #include "core/mesh/mesh_topology.hpp"
 #include "core/mesh/normals.hpp"
 #include "core/mesh/weld.hpp"
+#include "core/scene/incidence.hpp"
 #include "core/scene/simulation_state.hpp"
 #include "core/text.hpp"
 
@@ -54,21 +55,6 @@ void addSprings(SceneTopology& scene, const IndexPair* pairs, std::size_t count,
     scene.springs.push_back(
         {a, b, rest, stiffness, dampingRatio * 2 * std::sqrt(stiffness * reduced)});
   }
-}
-
-/// Compressed rows of `refCount(item)` references per particle; `visit(item, emit)` calls
-/// emit(particle, reference) for each incidence. Two passes: count, then fill.
-template <class Visit>
-void buildIncidence(std::size_t particleCount, std::size_t itemCount, Visit visit,
-                    std::vector<Index>& rowStart, std::vector<Index>& refs) {
-  rowStart.assign(particleCount + 1, 0);
-  for (std::size_t item = 0; item < itemCount; ++item)
-    visit(item, [&](Index particle, Index) { ++rowStart[particle + 1]; });
-  for (std::size_t p = 0; p < particleCount; ++p) rowStart[p + 1] += rowStart[p];
-  refs.resize(rowStart.back());
-  std::vector<Index> cursor(rowStart.begin(), rowStart.end() - 1);
-  for (std::size_t item = 0; item < itemCount; ++item)
-    visit(item, [&](Index particle, Index ref) { refs[cursor[particle]++] = ref; });
 }
 
 /// Throws for an index past the vertices or a position that is not a finite number.
