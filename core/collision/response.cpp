@@ -35,16 +35,18 @@ bool leftAlone(const ResponseScene& scene, const EdgeContact& edge) {
                          scene.geometry.triangleSurface[edge.triangle]);
 }
 
-/// The surface side of a contact: up to two triangles' corners with their weights.
+/// One side of a contact as weighted vertices: the struck surface's (up to two triangles'
+/// corners), or the moving one's (a particle, or the two ends of an edge).
 struct StruckPoint {
   std::array<Index, 6> vertex{};
   std::array<Scalar, 6> weight{};
   int count = 0;
   void add(const Triangle& t, const Vec3& barycentric, Scalar share) {
-    for (int k = 0; k < 3; ++k) {
-      vertex[count] = t[k];
-      weight[count++] = share * barycentric[k];
-    }
+    for (int k = 0; k < 3; ++k) add(t[k], share * barycentric[k]);
+  }
+  void add(Index v, Scalar w) {
+    vertex[count] = v;
+    weight[count++] = w;
   }
 };
 
@@ -62,19 +64,25 @@ Vec3 unitNormal(const ResponseScene& scene, Index triangle) {
   return (b - a).cross(c - a).normalized();
 }
 
-/// Moves particle `p` by `shift` relative to the struck point and sets their relative velocity
-/// from `normal`, splitting both between the two sides by inverse mass: the particle takes
-/// invA/k of each change and corner i of the struck side −wᵢ·invBᵢ/k, with
-/// k = invA + Σ wᵢ²·invBᵢ, which gives the whole change at the contact point and leaves the total
-/// momentum unchanged. In the paper's mode the struck side has no share (invB = 0). Returns
+/// Moves the point `mover` by `shift` relative to the struck point and sets their relative velocity
+/// from `normal`, splitting both between the two sides by inverse mass: vertex i of the mover
+/// takes wᵢ·invAᵢ/k of each change and corner j of the struck side −wⱼ·invBⱼ/k, with
+/// k = Σ wᵢ²·invAᵢ + Σ wⱼ²·invBⱼ, which gives the whole change at the contact point and leaves the
+/// total momentum unchanged. In the paper's mode the struck side has no share (invB = 0). Returns
 /// false, with nothing to move, when neither side can move.
-bool computeCorrection(const ResponseScene& scene, Index p, const StruckPoint& struck,
-                       const Vec3& shift, const Vec3& normal, Scalar restitution, Scalar friction,
-                       ResponseMode mode, Correction& correction) {
+bool computeCorrection(const ResponseScene& scene, const StruckPoint& mover,
+                       const StruckPoint& struck, const Vec3& shift, const Vec3& normal,
+                       Scalar restitution, Scalar friction, ResponseMode mode,
+                       Correction& correction) {
   correction.count = 0;
-  const Scalar invA = inverseMass(scene, p);
-  std::array<Scalar, 6> invB{};
-  Scalar k = invA;
+  std::array<Scalar, 6> invA{}, invB{};
+  Scalar k = 0;
+  Vec3 moverVelocity = Vec3::Zero();
+  for (int i = 0; i < mover.count; ++i) {
+    invA[i] = inverseMass(scene, mover.vertex[i]);
+    k += mover.weight[i] * mover.weight[i] * invA[i];
+    moverVelocity += mover.weight[i] * velocity(scene, mover.vertex[i]);
+  }
   for (int i = 0; i < struck.count; ++i) {
     invB[i] = mode == ResponseMode::Paper ? Scalar(0) : inverseMass(scene, struck.vertex[i]);
     k += struck.weight[i] * struck.weight[i] * invB[i];
@@ -84,7 +92,7 @@ bool computeCorrection(const ResponseScene& scene, Index p, const StruckPoint& s
   Vec3 surfaceVelocity = Vec3::Zero();
   for (int i = 0; i < struck.count; ++i)
     surfaceVelocity += struck.weight[i] * velocity(scene, struck.vertex[i]);
-  const Vec3 relative = velocity(scene, p) - surfaceVelocity;
+  const Vec3 relative = moverVelocity - surfaceVelocity;
   const Scalar normalSpeed = relative.dot(normal);
   Vec3 velocityChange = Vec3::Zero();
   if (normalSpeed < 0) {
@@ -96,13 +104,27 @@ bool computeCorrection(const ResponseScene& scene, Index p, const StruckPoint& s
     velocityChange = keep * tangential - restitution * normalSpeed * normal - relative;
   }
 
-  if (invA > 0) correction.add(p, (invA / k) * shift, (invA / k) * velocityChange);
+  for (int i = 0; i < mover.count; ++i) {
+    if (invA[i] == 0) continue;
+    const Scalar share = mover.weight[i] * invA[i] / k;
+    correction.add(mover.vertex[i], share * shift, share * velocityChange);
+  }
   for (int i = 0; i < struck.count; ++i) {
     if (invB[i] == 0) continue;
     const Scalar share = struck.weight[i] * invB[i] / k;
     correction.add(struck.vertex[i], -share * shift, -share * velocityChange);
   }
   return true;
+}
+
+/// The same for particle `p`.
+bool computeCorrection(const ResponseScene& scene, Index p, const StruckPoint& struck,
+                       const Vec3& shift, const Vec3& normal, Scalar restitution, Scalar friction,
+                       ResponseMode mode, Correction& correction) {
+  StruckPoint mover;
+  mover.add(p, 1);
+  return computeCorrection(scene, mover, struck, shift, normal, restitution, friction, mode,
+                           correction);
 }
 
 /// Applies a correction at once.
@@ -202,6 +224,30 @@ void recordEdgeContacts(const ResponseScene& scene, const std::vector<EdgeContac
   }
 }
 
+/// Gathers the push of an edge that cuts a rim (findRimCrossing) apart from the rim, by what brings
+/// them the skin apart, at most kMaxEdgePush of the edge's length. Returns whether it gathered one.
+bool pushRimCrossing(const ResponseScene& scene, const EdgeContact& edge, ResponseMode mode,
+                     Correction& correction, EdgePushes& gathered) {
+  const std::optional<RimCrossing> rim =
+      findRimCrossing(scene.geometry, scene.state.position, edge);
+  if (!rim || rim->separation >= scene.skin) return false;
+  const Scalar edgeLength = (scene.vertex(rim->edge[1]) - scene.vertex(rim->edge[0])).norm();
+  StruckPoint mover, struck;
+  mover.add(rim->edge[0], 1 - rim->along);
+  mover.add(rim->edge[1], rim->along);
+  struck.add(rim->rim[0], 1 - rim->alongRim);
+  struck.add(rim->rim[1], rim->alongRim);
+  const Index surfaceB = scene.geometry.triangleSurface[edge.triangle];
+  if (!computeCorrection(
+          scene, mover, struck,
+          std::min(scene.skin - rim->separation, kMaxEdgePush * edgeLength) * rim->normal,
+          rim->normal, scene.geometry.restitution[surfaceB], scene.geometry.friction[surfaceB],
+          mode, correction))
+    return false;
+  gathered.add(correction);
+  return true;
+}
+
 /// One pass of edge pushes: each edge end that lies inside a closed surface is pushed back out.
 /// Every push of the pass is measured on the positions as the pass found them and gathered first,
 /// then all are applied, scaled (EdgePushes). Returns the pushes gathered.
@@ -218,7 +264,12 @@ std::size_t pushEdgeEndsOut(const ResponseScene& scene, const std::vector<EdgeCo
     // responses and the earlier passes), so an end that an earlier pass pushed out is left alone.
     const EdgeEndsInside inside =
         findEdgeEndsInside(geometry, scene.state.position, edge, scene.inside);
-    if (inside.count == 0) continue;
+    if (inside.count == 0) {
+      if (scene.inside == InsideTest::NearestFace &&
+          pushRimCrossing(scene, edge, mode, correction, gathered))
+        ++pushes;
+      continue;
+    }
     StruckPoint struck;
     struck.add(geometry.triangleVertices[edge.triangle], edge.hit.barycentric, 1);
     const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
@@ -288,6 +339,66 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
     inside.depth[inside.count++] = depth;
   }
   return inside;
+}
+
+std::optional<RimCrossing> findRimCrossing(const CollisionGeometry& geometry,
+                                           std::span<const Vec3> positions,
+                                           const EdgeContact& edge) {
+  const EdgeEndsInside paper = findEdgeEndsInside(geometry, positions, edge);
+  if (paper.count != 1) return std::nullopt;
+  const Triangle& face = geometry.triangleVertices[edge.triangle];
+  const TriangleCorners corners = geometry.corners(positions, edge.triangle);
+  const Vec3d a = corners[0].cast<double>(), b = corners[1].cast<double>(),
+              c = corners[2].cast<double>();
+  const Vec3d end = geometry.vertex(positions, paper.end[0]).cast<double>();
+  // The rim is the face's edge its foot lies furthest past: opposite the most negative of the
+  // foot's barycentric coordinates.
+  const Vec3d ab = b - a, ac = c - a, ax = end - a;
+  const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
+  const double d20 = ax.dot(ab), d21 = ax.dot(ac);
+  const double denominator = d00 * d11 - d01 * d01;
+  if (!(denominator > 0)) return std::nullopt;
+  const double beta = (d11 * d20 - d01 * d21) / denominator;
+  const double gamma = (d00 * d21 - d01 * d20) / denominator;
+  const std::array<double, 3> foot{1 - beta - gamma, beta, gamma};
+  const int opposite = int(std::min_element(foot.begin(), foot.end()) - foot.begin());
+  if (!(foot[opposite] < 0)) return std::nullopt;
+  const Index r0 = face[(opposite + 1) % 3], r1 = face[(opposite + 2) % 3];
+  // The face across the rim.
+  Index across = kNoIndex;
+  for (Index t : geometry.trianglesAround(r0))
+    if (t != edge.triangle && hasVertex(geometry.triangleVertices[t], r1)) {
+      across = t;
+      break;
+    }
+  if (across == kNoIndex) return std::nullopt;
+  const Vec3d acrossNormal = [&] {
+    const TriangleCorners o = geometry.corners(positions, across);
+    return Vec3d((o[1] - o[0]).cross(o[2] - o[0]).cast<double>().normalized());
+  }();
+  const Vec3d outward = (b - a).cross(c - a).normalized() + acrossNormal;
+
+  RimCrossing crossing;
+  const Triangle& edgeTriangle = geometry.triangleVertices[edge.edgeTriangle];
+  crossing.edge = {edgeTriangle[edge.edge], edgeTriangle[(edge.edge + 1) % 3]};
+  crossing.rim = {r0, r1};
+  const Vec3d e0 = geometry.vertex(positions, crossing.edge[0]).cast<double>();
+  const Vec3d e1 = geometry.vertex(positions, crossing.edge[1]).cast<double>();
+  const Vec3d q0 = geometry.vertex(positions, r0).cast<double>();
+  const Vec3d q1 = geometry.vertex(positions, r1).cast<double>();
+  Vec3d normal = (e1 - e0).cross(q1 - q0);
+  // An edge along the rim has no common perpendicular with it (within about 6°).
+  if (!(normal.squaredNorm() > 0.01 * (e1 - e0).squaredNorm() * (q1 - q0).squaredNorm()))
+    return std::nullopt;
+  normal.normalize();
+  if (normal.dot(outward) < 0) normal = -normal;
+  const std::array<double, 2> where = closestSegmentParameters(e0, e1, q0, q1);
+  crossing.along = Scalar(where[0]);
+  crossing.alongRim = Scalar(where[1]);
+  crossing.normal = normal.cast<Scalar>();
+  crossing.separation =
+      Scalar(normal.dot((e0 + where[0] * (e1 - e0)) - (q0 + where[1] * (q1 - q0))));
+  return crossing;
 }
 
 bool behindNearestFace(const CollisionGeometry& geometry, std::span<const Vec3> positions,

@@ -13,8 +13,9 @@
 /// triangle's corners the opposite way, weighted by the barycentric coordinates of the contact
 /// and the masses, so a soft–soft contact conserves momentum; static colliders never move, so
 /// against them both modes are the paper's. Edge contacts (an edge through a face) also push the
-/// edge's end that lies inside a closed surface back out: particle segments see only what
-/// crossed during this substep, edges see what is still inside from before.
+/// edge's end that lies inside a closed surface back out (or, where neither end is inside, the
+/// edge out of the corner it cuts: RimCrossing): particle segments see only what crossed during
+/// this substep, edges see what is still inside from before.
 ///
 /// The edge pushes are made in kEdgePushPasses passes. Within a pass every push is measured on the
 /// same positions and gathered before any is applied; then each is scaled by 1/n, n the most pushes
@@ -31,6 +32,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -141,6 +143,27 @@ EdgeEndsInside findEdgeEndsInside(const CollisionGeometry& geometry,
 /// Needs the geometry's vertex–triangle links (linkVertexTriangles).
 bool behindNearestFace(const CollisionGeometry& geometry, std::span<const Vec3> positions,
                        Index triangle, const Vec3& point);
+
+/// An edge that passes through a face of a closed surface and out again past one of the face's
+/// edges (the rim), with neither end inside by InsideTest::NearestFace: it cuts the corner the
+/// struck face makes with its neighbour across the rim. Where an end is pushed out along the struck
+/// face's normal, as the paper's test does, a block resting on another was shoved sideways by the
+/// base's edges under its rim; left alone, a pile's edges that cut each other's balls went to the
+/// failsafe (1.9 passes a step instead of 1.3). So the edge and the rim are pushed apart along
+/// their common perpendicular, out of the corner.
+struct RimCrossing {
+  std::array<Index, 2> edge{}, rim{};
+  Scalar along = 0, alongRim = 0;  ///< where the closest points lie on the edge and on the rim
+  Vec3 normal = Vec3::Zero();      ///< unit, out of the corner: towards the two faces' outside
+  Scalar separation = 0;           ///< of the edge from the rim along `normal` (< 0: crossed)
+};
+
+/// The rim an edge contact's edge cuts, where it has one: an end of the edge lies behind the
+/// struck face near it (the paper's test) but not behind the face nearest it, and its foot on the
+/// face's plane lies outside the face, past the rim. Needs the geometry's vertex–triangle links.
+std::optional<RimCrossing> findRimCrossing(const CollisionGeometry& geometry,
+                                           std::span<const Vec3> positions,
+                                           const EdgeContact& edge);
 
 /// Writes this substep's contacts to `contacts` (replacing what was there) and, unless `mode` is
 /// ResponseMode::None, moves the particles and sets their velocities as described above. Contacts

@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include "core/collision/continuous_collision.hpp"
+#include "core/collision/detection.hpp"
 #include "core/collision/response.hpp"
 #include "core/dynamics/energy.hpp"
 #include "core/mesh/icosphere.hpp"
@@ -407,17 +410,33 @@ TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
   expectRestingBlockStays(simulator, 24, 0.025);
 }
 
+/// The block of the edge-push tests (|x| < 0.3, |y| < 0.1, |z| < 0.3) in rubber, without gravity,
+/// and with it, where given, a probe: one rubber triangle.
+SceneSetup blockScene(std::optional<std::array<Vec3f, 3>> probe = std::nullopt) {
+  SceneSetup scene;
+  scene.settings.gravity = Vec3::Zero();
+  BodySetup block;
+  block.name = "block";
+  block.mesh = makeBlock(Vec3f::Zero(), Vec3f(0.3f, 0.1f, 0.3f), 3);
+  block.material = *findMaterialPreset("rubber");
+  scene.bodies.push_back(block);
+  if (probe) {
+    BodySetup body;
+    body.name = "probe";
+    body.mesh.positions.assign(probe->begin(), probe->end());
+    body.mesh.triangles = {{0, 1, 2}};
+    body.material = block.material;
+    scene.bodies.push_back(body);
+  }
+  return scene;
+}
+
 /// behindNearestFace() against the block's own inside (|x| < 0.3, |y| < 0.1, |z| < 0.3): a point
 /// the edge pushes would take for inside a face (behind its plane, within the face's longest side
 /// of its centroid) is behind the nearest face whenever it is inside the block, and never when it
 /// is outside and the face nearest it is around the struck face's corners, where the test looks.
 TEST(EdgePushes, AnEndIsInsideOnlyIfTheFaceNearestItHasItBehind) {
-  SceneSetup scene;
-  BodySetup body;
-  body.name = "block";
-  body.mesh = makeBlock(Vec3f::Zero(), Vec3f(0.3f, 0.1f, 0.3f), 3);
-  scene.bodies.push_back(body);
-  const Simulator simulator(buildSceneTopology(scene));
+  const Simulator simulator(buildSceneTopology(blockScene()));
   const CollisionGeometry& geometry = simulator.collision();
   const std::span<const Vec3> positions = simulator.state().position;
   const Index triangles = Index(geometry.triangleVertices.size());
@@ -456,6 +475,83 @@ TEST(EdgePushes, AnEndIsInsideOnlyIfTheFaceNearestItHasItBehind) {
   }
   EXPECT_GT(inside, 1000u);
   EXPECT_GT(outside, 1000u) << "points outside that the struck face's plane alone calls inside";
+}
+
+/// An edge that cuts a block's rim, entering by a side face and leaving by the top face, with both
+/// ends outside: the probe's edge from (0.32, 0.07) to (0.27, 0.12) across the corner at
+/// (0.3, 0.1), whose closest point (0.295, 0.095) lies 5 mm inside each face. findRimCrossing names
+/// the rim and the analytic common perpendicular; the response pushes the edge out of the corner,
+/// so that the probe and the block no longer intersect, and moves no momentum.
+TEST(EdgePushes, AnEdgeCuttingABlocksRimIsPushedOutOfTheCorner) {
+  const float z = 0.03f;
+  const SceneSetup scene =
+      blockScene({{Vec3f(0.32f, 0.07f, z), Vec3f(0.27f, 0.12f, z), Vec3f(0.34f, 0.14f, z)}});
+  Simulator simulator(buildSceneTopology(scene));
+  const SceneTopology& topology = simulator.topology();
+  const CollisionGeometry& geometry = simulator.collision();
+  SimulationState& state = simulator.state();
+  const Index p = topology.bodies[1].firstParticle, q = p + 1;
+  ASSERT_GT(test::countIntersectingPairs(geometry, state.position).betweenSurfaces, 0u);
+
+  CollisionDetector detector(topology.settings.collisions);
+  detector.detect(topology, geometry, {state.position, state.position});
+  std::size_t rims = 0;
+  for (const EdgeContact& edge : detector.edgeContacts()) {
+    if (geometry.triangleSurface[edge.edgeTriangle] != 1) continue;
+    EXPECT_EQ(findEdgeEndsInside(geometry, state.position, edge, InsideTest::NearestFace).count, 0)
+        << "neither end is inside the block";
+    const std::optional<RimCrossing> rim = findRimCrossing(geometry, state.position, edge);
+    ASSERT_TRUE(rim) << "edge contact with block triangle " << edge.triangle;
+    ++rims;
+    for (Index r : rim->rim) {
+      EXPECT_NEAR(state.position[r].x(), 0.3f, 1e-6f);
+      EXPECT_NEAR(state.position[r].y(), 0.1f, 1e-6f);
+    }
+    EXPECT_EQ(std::min(rim->edge[0], rim->edge[1]), p);
+    EXPECT_EQ(std::max(rim->edge[0], rim->edge[1]), q);
+    EXPECT_NEAR(rim->normal.x(), std::sqrt(0.5f), 1e-5f);
+    EXPECT_NEAR(rim->normal.y(), std::sqrt(0.5f), 1e-5f);
+    EXPECT_NEAR(rim->normal.z(), 0.0f, 1e-5f);
+    EXPECT_NEAR(rim->separation, -0.005f * std::sqrt(2.0f), 1e-6f);
+  }
+  EXPECT_EQ(rims, 2u) << "the edge passes through a side face and the top face";
+
+  Vec3d momentumShift = Vec3d::Zero();
+  double moved = 0;
+  const std::vector<Vec3> before = state.position;
+  std::vector<Contact> contacts;
+  EdgePushes pushes(topology.particleCount());
+  respondToCollisions(topology, geometry, detector, ResponseMode::TwoSided, state, contacts, pushes,
+                      {}, InsideTest::NearestFace);
+  for (Index i = 0; i < topology.particleCount(); ++i) {
+    const Vec3d shift = double(topology.mass[i]) * (state.position[i] - before[i]).cast<double>();
+    momentumShift += shift;
+    moved += shift.norm();
+  }
+  EXPECT_GT(moved, 0);
+  // Positions are floats: storing a 7 mm push at 0.3 m rounds it by about 1e-5 of itself.
+  EXPECT_LT(momentumShift.norm(), 1e-3 * moved) << "of " << moved << " kg·m moved";
+  EXPECT_EQ(test::countIntersectingPairs(geometry, state.position).betweenSurfaces, 0u)
+      << "the edge still cuts the corner";
+}
+
+/// An end inside the block is the nearest-face test's to push: it has no rim.
+TEST(EdgePushes, AnEdgeWithAnEndInsideCutsNoRim) {
+  const SceneSetup scene = blockScene(
+      {{Vec3f(0.32f, 0.05f, 0.03f), Vec3f(0.28f, 0.05f, 0.03f), Vec3f(0.34f, 0.08f, 0.03f)}});
+  const Simulator simulator(buildSceneTopology(scene));
+  const CollisionGeometry& geometry = simulator.collision();
+  const std::span<const Vec3> positions = simulator.state().position;
+  CollisionDetector detector(simulator.topology().settings.collisions);
+  detector.detect(simulator.topology(), geometry, {positions, positions});
+  std::size_t crossings = 0;
+  for (const EdgeContact& edge : detector.edgeContacts()) {
+    if (geometry.triangleSurface[edge.edgeTriangle] != 1) continue;
+    ++crossings;
+    EXPECT_EQ(findEdgeEndsInside(geometry, positions, edge, InsideTest::NearestFace).count, 1);
+    EXPECT_FALSE(findRimCrossing(geometry, positions, edge));
+  }
+  EXPECT_GT(crossings, 0u);
 }
 
 /// The same blocks three skins apart: an ordinary contact once the top block has settled.
