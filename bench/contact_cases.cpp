@@ -6,6 +6,7 @@
 //
 //   contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] [separate|ignore]
 //                 [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] [--frames=N]
+//                 [--deep=MICRONS]
 //
 // A mesh file is baked as `softbake run FILE` bakes it; --frames=N overrides the scene's frames.
 //
@@ -21,6 +22,12 @@
 // crossing where nothing overlapped. The row and the csv give how deep the deepest of those reaches
 // (test::penetrationDepth: how far one triangle must move to part them; the row in µm, the csv
 // in scene units).
+//
+// --deep=MICRONS names on stderr, at each frame's end, every new pair where none overlapped that
+// is deeper than MICRONS: its triangles, their surfaces, its depth, and whether the simulator took
+// it for fitted (closer than the skin at the start) and its surfaces for overlapping at the start
+// (its own test, which counts touching within rounding; the exact checker's "none overlapped" does
+// not). What the engine's deep pairs were traced by, sessions running, with a temporary print.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -43,19 +50,22 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] "
                  "[separate|ignore] [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] "
-                 "[--frames=N]\n");
+                 "[--frames=N] [--deep=MICRONS]\n");
     return 1;
   }
   std::FILE* csv = nullptr;
   int frames = 0;
   // The two flags anywhere after the scene: taken out, the positional arguments close up.
   const char* csvPath = nullptr;
+  double deepMicrons = -1;
   int kept = 2;
   for (int i = 2; i < argc; ++i) {
     if (std::strncmp(argv[i], "--frames=", 9) == 0)
       frames = std::atoi(argv[i] + 9);
     else if (std::strncmp(argv[i], "--csv=", 6) == 0)
       csvPath = argv[i] + 6;
+    else if (std::strncmp(argv[i], "--deep=", 7) == 0)
+      deepMicrons = std::atof(argv[i] + 7);
     else
       argv[kept++] = argv[i];
   }
@@ -94,6 +104,8 @@ int main(int argc, char** argv) {
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
     const test::IntersectionCount atStart =
         test::countIntersectingPairs(simulator.collision(), simulator.state().position);
+    const std::vector<std::pair<Index, Index>> overlapping =
+        overlappingSurfaces(simulator.initialOverlaps());
     std::size_t worstNew = 0, worstNewWhereNone = 0;
     double deepestNewWhereNone = 0;
     double highest = start, responseSeconds = 0;
@@ -135,8 +147,23 @@ int main(int argc, char** argv) {
         const Index b = geometry.triangleSurface[pair.second];
         if (atStart.bySurfaces.count({std::min(a, b), std::max(a, b)})) continue;
         ++newWhereNone;
-        deepest = std::max(deepest, test::penetrationDepth(geometry.corners(at, pair.first),
-                                                           geometry.corners(at, pair.second)));
+        const double depth = test::penetrationDepth(geometry.corners(at, pair.first),
+                                                    geometry.corners(at, pair.second));
+        deepest = std::max(deepest, depth);
+        if (deepMicrons >= 0 && 1e6 * depth > deepMicrons) {
+          const TrianglePair ordered{std::min(pair.first, pair.second),
+                                     std::max(pair.first, pair.second)};
+          const bool fitted = std::binary_search(simulator.fittedPairs().begin(),
+                                                 simulator.fittedPairs().end(), ordered);
+          std::fprintf(stderr,
+                       "deep frame %d: triangles %u and %u, surfaces %u and %u, %.1f µm%s%s\n",
+                       frame, unsigned(pair.first), unsigned(pair.second), unsigned(a), unsigned(b),
+                       1e6 * depth, fitted ? ", fitted" : "",
+                       std::binary_search(overlapping.begin(), overlapping.end(),
+                                          std::pair(std::min(a, b), std::max(a, b)))
+                           ? ", surfaces overlapping at the start by the simulator's test"
+                           : "");
+        }
       }
       worstNew = std::max(worstNew, newPairs);
       worstNewWhereNone = std::max(worstNewWhereNone, newWhereNone);
