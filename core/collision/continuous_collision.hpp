@@ -49,6 +49,23 @@ std::optional<Impact> vertexFaceImpact(const PointPath& p, const PointPath& a, c
 std::optional<Impact> edgeEdgeImpact(const PointPath& p0, const PointPath& p1, const PointPath& q0,
                                      const PointPath& q1, double tolerance);
 
+/// The barycentric weights of a, b, c at the foot of `x` on the plane of triangle abc (Ericson,
+/// Real-Time Collision Detection, §3.4), unclamped: one is negative where the foot lies past the
+/// edge opposite its corner. None for a triangle with no area. In float or double, as given.
+template <class V>
+std::optional<std::array<typename V::Scalar, 3>> footBarycentric(const V& a, const V& b, const V& c,
+                                                                 const V& x) {
+  using S = typename V::Scalar;
+  const V ab = b - a, ac = c - a, ax = x - a;
+  const S d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
+  const S d20 = ax.dot(ab), d21 = ax.dot(ac);
+  const S denominator = d00 * d11 - d01 * d01;
+  if (!(denominator > 0)) return std::nullopt;
+  const S beta = (d11 * d20 - d01 * d21) / denominator;
+  const S gamma = (d00 * d21 - d01 * d20) / denominator;
+  return std::array<S, 3>{1 - beta - gamma, beta, gamma};
+}
+
 /// The closest point of triangle abc to p, as barycentric weights of a, b, c (Ericson,
 /// Real-Time Collision Detection, §5.1.5).
 Vec3d closestPointBarycentric(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);

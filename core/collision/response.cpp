@@ -353,16 +353,10 @@ std::optional<RimCrossing> findRimCrossing(const CollisionGeometry& geometry,
   const Vec3d end = geometry.vertex(positions, paper.end[0]).cast<double>();
   // The rim is the face's edge its foot lies furthest past: opposite the most negative of the
   // foot's barycentric coordinates.
-  const Vec3d ab = b - a, ac = c - a, ax = end - a;
-  const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
-  const double d20 = ax.dot(ab), d21 = ax.dot(ac);
-  const double denominator = d00 * d11 - d01 * d01;
-  if (!(denominator > 0)) return std::nullopt;
-  const double beta = (d11 * d20 - d01 * d21) / denominator;
-  const double gamma = (d00 * d21 - d01 * d20) / denominator;
-  const std::array<double, 3> foot{1 - beta - gamma, beta, gamma};
-  const int opposite = int(std::min_element(foot.begin(), foot.end()) - foot.begin());
-  if (!(foot[opposite] < 0)) return std::nullopt;
+  const std::optional<std::array<double, 3>> foot = footBarycentric(a, b, c, end);
+  if (!foot) return std::nullopt;
+  const int opposite = int(std::min_element(foot->begin(), foot->end()) - foot->begin());
+  if (!((*foot)[opposite] < 0)) return std::nullopt;
   const Index r0 = face[(opposite + 1) % 3], r1 = face[(opposite + 2) % 3];
   // The face across the rim.
   Index across = kNoIndex;

@@ -103,14 +103,9 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // the corners' departures from their body's mean travel, 4·reach.)
   const Scalar planeDistance = normal.dot(predicted(v) - predicted(corners[0]));
   if (std::min(distance, planeDistance) > 2 * gap + 8 * reach) return;
-  // The foot's barycentric coordinates (Ericson, Real-Time Collision Detection, §3.4).
-  const Scalar d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
-  const Scalar d20 = ax.dot(ab), d21 = ax.dot(ac);
-  const Scalar denominator = d00 * d11 - d01 * d01;
-  if (!(denominator > 0)) return;
-  const Scalar beta = (d11 * d20 - d01 * d21) / denominator;
-  const Scalar gamma = (d00 * d21 - d01 * d20) / denominator;
-  const Scalar alpha = 1 - beta - gamma;
+  const std::optional<std::array<Scalar, 3>> foot = footBarycentric(a, b, c, x);
+  if (!foot) return;
+  const auto [alpha, beta, gamma] = *foot;
   if (alpha < -kFootTolerance || beta < -kFootTolerance || gamma < -kFootTolerance) return;
   // The tolerance above is relative, so on a large triangle it reaches far past its edges: the
   // walls of a house butting edge to edge in one plane each had their corners in the next wall's
