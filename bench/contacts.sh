@@ -14,8 +14,7 @@ build=${1:-$root/build}
 cases=$build/bench/contact_cases  # and contact_sweep beside it
 [ -x "$cases" ] || { echo "contacts.sh: build $cases first (it needs the test suite)" >&2; exit 1; }
 
-printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s | substeps/frame | new pairs, max | new where none overlapped, max | the deepest of those, µm |\n'
-printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n'
+"$cases" --header
 # Per frame, the implicit runs with and without the failsafe, for the chart.
 frames=$root/bench/results/contacts_frames.csv
 rm -f "$frames"

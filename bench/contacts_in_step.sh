@@ -19,8 +19,7 @@ s["settings"]["substeps"] = sys.argv[1] if sys.argv[1] == "auto" else int(sys.ar
 json.dump(s, open(sys.argv[2], "w"))' "$3" "$work/$1.json"
   echo "$work/$1.json"
 }
-printf '| scene | integrator | bodies | faces | last frame | intersecting pairs between bodies, max | within a body, max | contacts/substep | response + failsafe ms/substep | energy above start, J | frames/s | substeps/frame | new pairs, max | new where none overlapped, max | the deepest of those, µm |\n'
-printf '|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n'
+"$build/bench/contact_cases" --header
 for source in balls10k "$root/examples/fig7_10k_faces.json" "$root/bench/scenes/balls10k_falling_apart.json"; do
   file=$(scene "$(basename "$source" .json)" "$source" auto)
   for mode in afterstep instep; do

@@ -6,9 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "tests/support/exact_geometry.hpp"
 
@@ -157,6 +159,90 @@ TEST(PenetrationDepth, AgreesWithADenseSearchOverDirectionsOnRandomPairs) {
     }
   }
   EXPECT_GT(crossing, 30) << "both answers must be exercised";
+}
+
+/// The least distance between the points of a barycentric grid of `steps` per edge on each
+/// triangle: at least the distance between the triangles, and at most 2·L/steps more (L the
+/// longest edge), as every point of a triangle lies within L/steps of a grid point.
+double sampledDistance(const TriangleCorners& a, const TriangleCorners& b, int steps) {
+  const auto grid = [&](const TriangleCorners& t) {
+    std::vector<Vec3d> points;
+    for (int i = 0; i <= steps; ++i)
+      for (int j = 0; i + j <= steps; ++j) {
+        const double u = double(i) / steps, v = double(j) / steps;
+        points.push_back((1 - u - v) * t[0].cast<double>() + u * t[1].cast<double>() +
+                         v * t[2].cast<double>());
+      }
+    return points;
+  };
+  const std::vector<Vec3d> first = grid(a), second = grid(b);
+  double least = std::numeric_limits<double>::infinity();
+  for (const Vec3d& p : first)
+    for (const Vec3d& q : second) least = std::min(least, (p - q).squaredNorm());
+  return std::sqrt(least);
+}
+
+double longestEdge(const TriangleCorners& t) {
+  return std::max(
+      {double((t[1] - t[0]).norm()), double((t[2] - t[1]).norm()), double((t[0] - t[2]).norm())});
+}
+
+TEST(TriangleDistance, ParallelFacesAreTheirOffsetApartAndCrossingOnesZero) {
+  const TriangleCorners floor = {Vec3(0, 0, 0), Vec3(4, 0, 0), Vec3(0, 4, 0)};
+  const TriangleCorners above = {Vec3(1, 1, 0.5f), Vec3(2, 1, 0.5f), Vec3(1, 2, 0.5f)};
+  EXPECT_NEAR(triangleDistance(floor, above), 0.5, 1e-12);
+  EXPECT_NEAR(triangleDistance(above, floor), 0.5, 1e-12);
+  // An edge 0.25 under a face, the two planes at right angles.
+  const TriangleCorners beside = {Vec3(5, -1, 0.25f), Vec3(5, 3, 0.25f), Vec3(7, 1, 0.25f)};
+  const TriangleCorners crossing = {Vec3(4, 0.5f, 0), Vec3(6, 0.5f, 0), Vec3(5, 0.5f, -3)};
+  EXPECT_NEAR(triangleDistance(beside, crossing), 0.25, 1e-7);
+  // Standing through the floor: they meet.
+  const TriangleCorners standing = {Vec3(1, 1, -1), Vec3(1, 2, 1), Vec3(1, 1, 1)};
+  EXPECT_EQ(triangleDistance(floor, standing), 0.0);
+}
+
+TEST(TriangleDistance, AgreesWithDenseSamplingOnRandomPairs) {
+  std::mt19937 random(13);
+  std::uniform_real_distribution<float> coordinate(-1, 1);
+  int apart = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    TriangleCorners a, b;
+    for (Vec3& p : a) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
+    for (Vec3& p : b) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
+    b[0].x() += 1.5f, b[1].x() += 1.5f, b[2].x() += 1.5f;  // about half of them apart
+    constexpr int kSteps = 60;
+    const double distance = triangleDistance(a, b);
+    const double sampled = sampledDistance(a, b, kSteps);
+    EXPECT_LE(distance, sampled + 1e-12) << "trial " << trial;
+    EXPECT_GE(distance, sampled - (longestEdge(a) + longestEdge(b)) / kSteps) << "trial " << trial;
+    if (referenceIntersects(a, b)) {
+      EXPECT_EQ(distance, 0.0) << "trial " << trial;
+    } else {
+      apart += distance > 0;
+    }
+  }
+  EXPECT_GT(apart, 30) << "both answers must be exercised";
+}
+
+TEST(TouchingWithinRounding, AFloatStepOffAFaceIsWithinItAndAMillimetreIsNot) {
+  // The checker's own case (TouchingCountsAndOneStepAwayDoesNot): a corner one float step off the
+  // other's plane is apart by the exact checker, and within rounding here.
+  TriangleCorners floor = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  TriangleCorners standing = {Vec3(0.25f, 0.25f, 0), Vec3(0.3f, 0.2f, 1), Vec3(0.2f, 0.3f, 1)};
+  EXPECT_TRUE(touchingWithinRounding(floor, standing));
+  standing[0].z() = std::nextafter(0.0f, 1.0f);
+  EXPECT_TRUE(touchingWithinRounding(floor, standing));
+  standing[0].z() = 1e-3f;
+  EXPECT_FALSE(touchingWithinRounding(floor, standing));
+  // The rounding grows with the coordinates: 2 µm apart is within it 40 m from the origin (a float
+  // there is 3.8 µm apart), and not at 1 m.
+  for (Vec3& corner : floor) corner.x() += 40;
+  for (Vec3& corner : standing) corner.x() += 40;
+  standing[0].z() = 2e-6f;
+  EXPECT_TRUE(touchingWithinRounding(floor, standing));
+  for (Vec3& corner : floor) corner.x() -= 39;
+  for (Vec3& corner : standing) corner.x() -= 39;
+  EXPECT_FALSE(touchingWithinRounding(floor, standing));
 }
 
 }  // namespace

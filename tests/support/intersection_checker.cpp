@@ -11,6 +11,8 @@
 #include <numeric>
 #include <vector>
 
+#include "tests/support/exact_geometry.hpp"
+
 namespace softbake::test {
 
 namespace {
@@ -106,6 +108,31 @@ double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b) {
       if (axis.norm() > 1e-9 * e.norm() * f.norm()) along(axis);
     }
   return std::isfinite(depth) ? std::max(depth, 0.0) : 0.0;
+}
+
+double triangleDistance(const TriangleCorners& a, const TriangleCorners& b) {
+  std::array<Vec3d, 3> p, q;
+  for (int k = 0; k < 3; ++k) {
+    p[k] = a[k].cast<double>();
+    q[k] = b[k].cast<double>();
+  }
+  // Two triangles that do not meet are nearest at a corner of one or at a point of an edge of
+  // each: an edge of one against the other triangle covers both.
+  double distance = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    distance = std::min(distance, segmentTriangleDistance(p[k], p[(k + 1) % 3], q[0], q[1], q[2]));
+    distance = std::min(distance, segmentTriangleDistance(q[k], q[(k + 1) % 3], p[0], p[1], p[2]));
+  }
+  return distance;
+}
+
+bool touchingWithinRounding(const TriangleCorners& a, const TriangleCorners& b) {
+  double largest = 0;
+  for (const TriangleCorners* corners : {&a, &b})
+    for (const Vec3& corner : *corners)
+      largest = std::max(largest, double(corner.cwiseAbs().maxCoeff()));
+  return triangleDistance(a, b) <=
+         kTouchingSpacings * double(std::numeric_limits<float>::epsilon()) * largest;
 }
 
 }  // namespace softbake::test

@@ -50,4 +50,18 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
 /// angle cross each other's planes far from where they meet.
 double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b);
 
+/// The distance between two closed triangles, in double: the least over each one's edges of the
+/// edge's distance from the other triangle; 0 where they meet.
+double triangleDistance(const TriangleCorners& a, const TriangleCorners& b);
+
+/// Float spacings within which two triangles count as touching (see touchingWithinRounding()).
+inline constexpr double kTouchingSpacings = 4;
+
+/// Whether two triangles lie within kTouchingSpacings spacings of a float at their largest
+/// coordinate of each other, touching included: so close that rounding their coordinates alone
+/// decides whether they meet. Faces modelled onto each other (the parts of a CAD assembly fitted
+/// face to face) come out of a float mesh that close, a step to one side or the other, and which
+/// side says nothing about the model: the exact checker calls them apart or intersecting by it.
+bool touchingWithinRounding(const TriangleCorners& a, const TriangleCorners& b);
+
 }  // namespace softbake::test
