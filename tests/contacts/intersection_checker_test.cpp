@@ -137,14 +137,20 @@ TEST(PenetrationDepth, FacesAtASlightAngleThatBarelyOverlapAreBarelyDeep) {
   EXPECT_LT(depth, 1e-3);
 }
 
+/// A triangle with corners drawn uniformly from the cube [−1, 1]³.
+TriangleCorners randomTriangle(std::mt19937& random) {
+  std::uniform_real_distribution<float> coordinate(-1, 1);
+  TriangleCorners t;
+  for (Vec3& p : t) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
+  return t;
+}
+
 TEST(PenetrationDepth, AgreesWithADenseSearchOverDirectionsOnRandomPairs) {
   std::mt19937 random(11);
-  std::uniform_real_distribution<float> coordinate(-1, 1);
   int crossing = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    TriangleCorners a, b;
-    for (Vec3& p : a) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
-    for (Vec3& p : b) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
+    const TriangleCorners a = randomTriangle(random);
+    const TriangleCorners b = randomTriangle(random);
     const double depth = penetrationDepth(a, b);
     const double searched = bruteForceDepth(a, b, 20000);
     // Every direction searched overlaps by at least the least one; 20 000 directions lie within
@@ -203,12 +209,10 @@ TEST(TriangleDistance, ParallelFacesAreTheirOffsetApartAndCrossingOnesZero) {
 
 TEST(TriangleDistance, AgreesWithDenseSamplingOnRandomPairs) {
   std::mt19937 random(13);
-  std::uniform_real_distribution<float> coordinate(-1, 1);
   int apart = 0;
   for (int trial = 0; trial < 120; ++trial) {
-    TriangleCorners a, b;
-    for (Vec3& p : a) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
-    for (Vec3& p : b) p = Vec3(coordinate(random), coordinate(random), coordinate(random));
+    const TriangleCorners a = randomTriangle(random);
+    TriangleCorners b = randomTriangle(random);
     b[0].x() += 1.5f, b[1].x() += 1.5f, b[2].x() += 1.5f;  // about half of them apart
     constexpr int kSteps = 60;
     const double distance = triangleDistance(a, b);

@@ -24,6 +24,10 @@ bool shareAVertex(const Triangle& a, const Triangle& b) {
       if (u == v) return true;
   return false;
 }
+
+std::array<Vec3d, 3> inDouble(const TriangleCorners& t) {
+  return {t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>()};
+}
 }  // namespace
 
 IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
@@ -70,11 +74,7 @@ IntersectionCount countIntersectingPairs(const CollisionGeometry& geometry,
 }
 
 double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b) {
-  std::array<Vec3d, 3> p, q;
-  for (int k = 0; k < 3; ++k) {
-    p[k] = a[k].cast<double>();
-    q[k] = b[k].cast<double>();
-  }
+  const std::array<Vec3d, 3> p = inDouble(a), q = inDouble(b);
   double depth = std::numeric_limits<double>::infinity();
   const auto along = [&](const Vec3d& axis) {
     const double length = axis.norm();
@@ -111,11 +111,7 @@ double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b) {
 }
 
 double triangleDistance(const TriangleCorners& a, const TriangleCorners& b) {
-  std::array<Vec3d, 3> p, q;
-  for (int k = 0; k < 3; ++k) {
-    p[k] = a[k].cast<double>();
-    q[k] = b[k].cast<double>();
-  }
+  const std::array<Vec3d, 3> p = inDouble(a), q = inDouble(b);
   // Two triangles that do not meet are nearest at a corner of one or at a point of an edge of
   // each: an edge of one against the other triangle covers both.
   double distance = std::numeric_limits<double>::infinity();
