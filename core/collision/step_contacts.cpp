@@ -17,12 +17,16 @@ namespace {
 constexpr std::size_t kPairChunks = 128;
 /// An empty slot of the set of a triangle's partners' corners.
 constexpr Index kNoCorner = ~Index(0);
+/// Marks a partner, or a corner, that only a fitted pair brings: the top bit, free while a scene
+/// has fewer than 2³¹ collision vertices and triangles (a mesh that size would not fit in memory).
+constexpr Index kHoldOnly = Index(1) << 31;
 }  // namespace
 
 StepContacts::StepContacts(const SceneTopology& topology, const CollisionGeometry& geometry)
     : broadPhase_(makeBroadPhase(BroadPhaseKind::Bvh)) {
   const Scalar skin = topology.settings.skin;
   gap_.assign(geometry.surfaces.size(), skin);
+  fittedSurface_.assign(geometry.surfaces.size(), 0);
   for (std::size_t b = 0; b < topology.bodies.size(); ++b)
     gap_[b] = std::max(skin, Scalar(openSurfaceThickness(topology, topology.bodies[b])));
   predicted_.resize(topology.particleCount());
@@ -65,6 +69,8 @@ Scalar footOutside(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& x) {
 void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeometry& geometry,
                              std::span<const Vec3> start, Index v, Index triangle,
                              std::vector<Found>& out) const {
+  const bool holdOnly = (v & kHoldOnly) != 0;
+  v &= ~kHoldOnly;
   const Triangle& corners = geometry.triangleVertices[triangle];
   if (hasVertex(corners, v)) return;
   const Index particles = geometry.particleCount;
@@ -84,15 +90,45 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   normal /= area2;
   Scalar distance = normal.dot(ax);
   const Index surface = geometry.triangleSurface[triangle];
+  const Index vertexSurface = vertexSurface_[v];
+  const Scalar gap = std::max(gap_[surface], gap_[vertexSurface]);
+  const auto rest = [&](Index u) -> const Vec3& {
+    return geometry.vertex(topology.restPosition, u);
+  };
+  const auto restDouble = [&](Index u) -> Vec3d { return rest(u).cast<double>(); };
+  const auto placedWithinGap = [&] {
+    return pointTriangleDistance(restDouble(v), restDouble(corners[0]), restDouble(corners[1]),
+                                 restDouble(corners[2])) < gap;
+  };
+  // How far in front of the triangle's plane the scene placed the vertex, along the normal.
+  const auto placedInFront = [&] {
+    const Vec3 restNormal = (rest(corners[1]) - rest(corners[0]))
+                                .cross(rest(corners[2]) - rest(corners[0]))
+                                .normalized();
+    return restNormal.dot(rest(v) - rest(corners[0]));
+  };
+  // A vertex that only fitted pairs bring (parts of an assembly fitted onto each other), placed in
+  // front of another surface's triangle within the gap, is held once it is behind that face, where
+  // it is: its spring stops it going deeper and never pushes it out, so the fit gives as before
+  // and stores no energy. Left to the failsafe alone, which counts a fitted crossing only beyond
+  // its separation and leaves one already crossed alone, such vertices of an engine sank through
+  // their mates 171 µm deep by frame 13 (bench/results/assemblies.md).
+  Scalar fit = -1;
   const bool behind = distance < 0;
-  if (behind) {
+  if (holdOnly && vertexSurface != surface && placedWithinGap()) {
+    const Scalar placed = placedInFront();
+    // Placed behind the face, the vertex is inside the other part: an overlap set aside, which
+    // may slide out of itself.
+    if (placed < 0 || distance >= 0) return;
+    fit = placed;
+  } else if (holdOnly) {
+    return;
+  } else if (behind) {
     // Behind a closed surface is inside it: tangled, or left to the response and the failsafe.
     if (geometry.surfaceClosed[surface]) return;
     normal = -normal;
     distance = -distance;
   }
-  const Index vertexSurface = vertexSurface_[v];
-  const Scalar gap = std::max(gap_[surface], gap_[vertexSurface]);
   Scalar reach = reach_[v];
   for (Index corner : corners) reach = std::max(reach, reach_[corner]);
   const auto predicted = [&](Index u) -> const Vec3& {
@@ -140,22 +176,12 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // the normal as the stencil measures: held to the whole gap, each part pushed its own walls
   // apart and into the next part, and an engine of 115 parts took four times as long a step. (A
   // flat flag's vertices lie in the plane of all its triangles, but within the gap of few: its
-  // folds are held to the gap.) Fits between surfaces are the detector's fitted pairs, left out
-  // above.
-  if (vertexSurface == surface) {
-    const auto rest = [&](Index u) -> const Vec3& {
-      return geometry.vertex(topology.restPosition, u);
-    };
-    const auto restDouble = [&](Index u) -> Vec3d { return rest(u).cast<double>(); };
-    if (pointTriangleDistance(restDouble(v), restDouble(corners[0]), restDouble(corners[1]),
-                              restDouble(corners[2])) < gap) {
-      const Vec3 restNormal = (rest(corners[1]) - rest(corners[0]))
-                                  .cross(rest(corners[2]) - rest(corners[0]))
-                                  .normalized();
-      const Scalar placed = restNormal.dot(rest(v) - rest(corners[0]));
-      keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));
-    }
+  // folds are held to the gap.) Fits between surfaces are held above.
+  if (vertexSurface == surface && placedWithinGap()) {
+    const Scalar placed = placedInFront();
+    keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));
   }
+  if (fit >= 0) keep = std::min({keep, fit, distance});
   ContactStencil stencil;
   stencil.normal = normal;
   const std::array<Index, 4> vertices{v, corners[0], corners[1], corners[2]};
@@ -172,6 +198,7 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   stencil.offset = offset;
   stencil.friction =
       Scalar(std::sqrt(double(geometry.friction[surface]) * geometry.friction[vertexSurface]));
+  stencil.fitted = fit >= 0 || fittedSurface_[surface] || fittedSurface_[vertexSurface];
   out.push_back({(std::uint64_t(v) << 32) | triangle, stencil});
 }
 
@@ -222,7 +249,8 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
                     });
   const BroadPhaseInput input = geometry.broadPhaseInput(boxes_, &detector.flatPatches());
   if (!detector.findCachedPairs(input, pairs_)) pairCache_.findPairs(*broadPhase_, input, pairs_);
-  detector.dropLeftAlone(geometry, pairs_);
+  // The fitted pairs stay: their vertices are held as the scene placed them (tryVertex).
+  detector.dropIgnoredPairs(geometry, pairs_);
 
   // A vertex meets a triangle through each of its own triangles paired with it, 2.7 times on
   // average on figure 7. So each triangle gathers the corners of the triangles paired with it
@@ -235,9 +263,19 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
   for (std::size_t t = 0; t < triangles; ++t) partnerStart_[t + 1] += partnerStart_[t];
   partner_.resize(2 * pairs_.size());
   partnerFill_.assign(partnerStart_.begin(), partnerStart_.end() - 1);
-  for (const TrianglePair& pair : pairs_) {
-    partner_[partnerFill_[pair.first]++] = pair.second;
-    partner_[partnerFill_[pair.second]++] = pair.first;
+  {
+    const std::vector<TrianglePair>& fitted = detector.fittedPairs();
+    std::fill(fittedSurface_.begin(), fittedSurface_.end(), 0);
+    for (const TrianglePair& pair : fitted)
+      fittedSurface_[geometry.triangleSurface[pair.first]] =
+          fittedSurface_[geometry.triangleSurface[pair.second]] = 1;
+    auto f = fitted.begin();
+    for (const TrianglePair& pair : pairs_) {
+      while (f != fitted.end() && *f < pair) ++f;
+      const Index flag = (f != fitted.end() && *f == pair) ? kHoldOnly : 0;
+      partner_[partnerFill_[pair.first]++] = pair.second | flag;
+      partner_[partnerFill_[pair.second]++] = pair.first | flag;
+    }
   }
   const std::size_t chunks = pairs_.empty() ? 0 : kPairChunks;
   chunkFound_.reset(chunks);
@@ -258,14 +296,22 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
         const std::size_t mask = (std::size_t(1) << bits) - 1;
         seen.assign(mask + 1, kNoCorner);
         corners.clear();
-        for (Index k = partnerStart_[t]; k < partnerStart_[t + 1]; ++k)
-          for (Index v : geometry.triangleVertices[partner_[k]]) {
+        // A slot holds the corner's place in `corners`; a corner that an ordinary pair brings too
+        // is measured as an ordinary one.
+        const auto cornerAt = [&](std::size_t slot) { return corners[seen[slot]] & ~kHoldOnly; };
+        for (Index k = partnerStart_[t]; k < partnerStart_[t + 1]; ++k) {
+          const Index flag = partner_[k] & kHoldOnly;
+          for (Index v : geometry.triangleVertices[partner_[k] & ~kHoldOnly]) {
             std::size_t slot = (std::uint32_t(v) * 2654435769u) >> (32 - bits);
-            while (seen[slot] != kNoCorner && seen[slot] != v) slot = (slot + 1) & mask;
-            if (seen[slot] == v) continue;
-            seen[slot] = v;
-            corners.push_back(v);
+            while (seen[slot] != kNoCorner && cornerAt(slot) != v) slot = (slot + 1) & mask;
+            if (seen[slot] != kNoCorner) {
+              corners[seen[slot]] &= flag | ~kHoldOnly;
+              continue;
+            }
+            seen[slot] = Index(corners.size());
+            corners.push_back(v | flag);
           }
+        }
         for (Index v : corners) tryVertex(topology, geometry, start, v, Index(t), out);
       }
     });

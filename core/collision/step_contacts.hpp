@@ -18,9 +18,13 @@
 ///
 /// What it leaves out is what the paper's line–triangle test and response, then the failsafe,
 /// still catch after the step: edge against edge, a vertex that slides over a triangle's edge, and
-/// whatever moved further than predicted. The pairs the detector leaves alone (set aside, fitted,
-/// ignored) are left alone here too; a vertex its own surface placed within the gap of a triangle
-/// (the walls and fillets of a CAD part, a folded sheet) is kept no closer than it was placed.
+/// whatever moved further than predicted. The pairs the detector sets aside or ignores are left
+/// alone here too; a vertex its own surface placed within the gap of a triangle (the walls and
+/// fillets of a CAD part, a folded sheet) is kept no closer than it was placed. The detector's
+/// fitted pairs (faces of two parts fitted closer than the skin) give as the failsafe lets them,
+/// but a vertex only they bring, once behind the face it was placed in front of, is held where it
+/// is: no deeper, never pushed out. Their stencils are marked `fitted`, and the solve never raises
+/// their force beyond the spring's own (core/dynamics/contact_springs.hpp).
 /// Each (vertex, triangle) the pairs bring is measured once, by chunks of triangles whose buffers
 /// are joined in order and sorted by (vertex, triangle), so the stencils are the same for any
 /// thread count.
@@ -74,7 +78,9 @@ class StepContacts {
 
   std::vector<Scalar> gap_;           ///< per surface: the distance its contacts keep
   std::vector<Index> vertexSurface_;  ///< per collision vertex: its surface
-  std::vector<Vec3> predicted_;       ///< per particle: where its motion and gravity take it
+  /// Per surface, whether the detector's fitted pairs name it, at the latest find().
+  std::vector<char> fittedSurface_;
+  std::vector<Vec3> predicted_;  ///< per particle: where its motion and gravity take it
   /// Per collision vertex: half of how far its predicted travel departs from its body's mean.
   std::vector<Scalar> reach_;
   std::vector<Box3> vertexBoxes_, boxes_;

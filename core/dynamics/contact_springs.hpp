@@ -93,7 +93,8 @@ class ContactSprings {
   /// After a solve that gave `deltaV`: lets go of springs that pull, takes in stencils that end
   /// within the gap, raises the force of springs that end more than `tolerance` inside it (an
   /// augmented-Lagrangian step: a spring stiff enough for its own particles yields under a whole
-  /// body's load), and moves friction between sticking and sliding. Returns how many changed.
+  /// body's load; never a `fitted` stencil's, beside holds that cannot give way), and moves
+  /// friction between sticking and sliding. Returns how many changed.
   std::size_t update(const Vec3* v0, const Vec3* deltaV, Scalar h, Scalar tolerance);
   /// Joins in `group` (per body, its group's lowest body; each body its own on entry) the bodies
   /// an active spring couples, and marks in `held` a body of each group with a spring against a

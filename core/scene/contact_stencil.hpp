@@ -18,6 +18,9 @@ struct ContactStencil {
   Vec3 normal = Vec3::Zero();  ///< unit, towards the side the particle is kept on
   Scalar offset = 0;           ///< C(x) = normal·Σ weight_k·x_k + offset
   Scalar friction = 0;         ///< Coulomb coefficient
+  /// Of a surface fitted onto another (core/collision/step_contacts.hpp): the solve never raises
+  /// its force beyond the spring's own.
+  bool fitted = false;
 };
 
 }  // namespace softbake
