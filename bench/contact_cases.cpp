@@ -28,10 +28,11 @@
 // any motion may round them across; the pairs that stood further apart crossed a real gap.
 //
 // --deep=MICRONS names on stderr, at each frame's end, every new pair where none overlapped that
-// is deeper than MICRONS: its triangles, their surfaces, its depth, and whether the simulator took
-// it for fitted (closer than the skin at the start) and its surfaces for overlapping at the start
-// (its own test, which counts touching within rounding; the exact checker's "none overlapped" does
-// not). What the engine's deep pairs were traced by, sessions running, with a temporary print.
+// is deeper than MICRONS: its triangles, their surfaces, its depth, how far apart they started,
+// and whether the simulator took it for fitted (closer than the skin at the start) and its
+// surfaces for overlapping at the start (its own test, which counts touching within rounding; the
+// exact checker's "none overlapped" does not). What the engine's deep pairs were traced by,
+// sessions running, with a temporary print.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -189,9 +190,13 @@ int main(int argc, char** argv) {
           const bool fitted = std::binary_search(simulator.fittedPairs().begin(),
                                                  simulator.fittedPairs().end(), ordered);
           std::fprintf(stderr,
-                       "deep frame %d: triangles %u and %u, surfaces %u and %u, %.1f µm%s%s%s\n",
+                       "deep frame %d: triangles %u and %u, surfaces %u and %u, %.1f µm, %.1f µm "
+                       "apart at the start%s%s%s\n",
                        frame, unsigned(pair.first), unsigned(pair.second), unsigned(a), unsigned(b),
-                       1e6 * depth, fitted ? ", fitted" : "",
+                       1e6 * depth,
+                       1e6 * test::triangleDistance(geometry.corners(startPosition, pair.first),
+                                                    geometry.corners(startPosition, pair.second)),
+                       fitted ? ", fitted" : "",
                        touching ? ", touching at the start within rounding" : "",
                        std::binary_search(overlapping.begin(), overlapping.end(),
                                           std::pair(std::min(a, b), std::max(a, b)))
