@@ -123,9 +123,17 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
     fit = placed;
   } else if (holdOnly) {
     return;
-  } else if (behind) {
+  } else if (behind && geometry.surfaceClosed[surface]) {
     // Behind a closed surface is inside it: tangled, or left to the response and the failsafe.
-    if (geometry.surfaceClosed[surface]) return;
+    // But for a vertex its own surface placed in front of the triangle within the gap (a part's
+    // walls or fillets modelled closer than the skin): the failsafe gives such meetings as it
+    // gives fits, and one of an engine's parts went 110 µm through itself by frame 14. It is held
+    // where it is, as a fit is.
+    if (vertexSurface != surface || !placedWithinGap()) return;
+    const Scalar placed = placedInFront();
+    if (placed < 0) return;
+    fit = placed;
+  } else if (behind) {
     normal = -normal;
     distance = -distance;
   }
@@ -177,7 +185,7 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // apart and into the next part, and an engine of 115 parts took four times as long a step. (A
   // flat flag's vertices lie in the plane of all its triangles, but within the gap of few: its
   // folds are held to the gap.) Fits between surfaces are held above.
-  if (vertexSurface == surface && placedWithinGap()) {
+  if (fit < 0 && vertexSurface == surface && placedWithinGap()) {
     const Scalar placed = placedInFront();
     keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));
   }

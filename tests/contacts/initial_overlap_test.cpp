@@ -411,51 +411,43 @@ TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
   expectRestingBlockStays(simulator, 24, 0.025);
 }
 
-/// The hold of a fit inside the step (core/collision/step_contacts.hpp), on blockOnBlock(0.25):
-/// the top block's bottom vertices, placed a quarter skin above the base, some of them moved 20 µm
-/// behind the base's top face (as rounding leaves a vertex of a CAD fit a hair behind its mate).
-/// Each of those over the base gets a stencil that holds it where it is: along the face's normal,
-/// to the side it was placed on, C(x) = 0 at the step's start, so it is neither pushed out (a push
-/// between fitted faces blew an assembly up) nor let deeper (left to the failsafe, which counts a
-/// fitted crossing only beyond its separation, such vertices of an engine sank 171 µm). The rest,
-/// still in front, get no stencil from the fit: a fit gives, and is never pushed.
-TEST(InitialOverlap, AFittedVertexBehindItsMateIsHeldWhereItIsAndNeverPushed) {
-  const SceneSetup scene = blockOnBlock(0.25f);
+/// The step's stencils (core/collision/step_contacts.hpp) with blockOnBlock(0.25)'s top vertices
+/// over the base, placed a quarter skin above it, every other one moved 20 µm behind the base's
+/// top face (as rounding leaves a vertex of a CAD fit a hair behind its mate): `sunk` and
+/// `inFront` name them. Each sunk one must be held where it is: a `fitted` stencil along the
+/// face's normal, to the side it was placed on, with C(x) = 0 at the step's start, so it is
+/// neither pushed out nor let deeper.
+struct SunkFit {
+  std::vector<ContactStencil> stencils;
+  std::vector<Index> sunk, inFront;
+};
+SunkFit sinkIntoFit(const SceneSetup& scene) {
   Simulator simulator(buildSceneTopology(scene));
   const SceneTopology& topology = simulator.topology();
   const CollisionGeometry& geometry = simulator.collision();
-  ASSERT_GT(simulator.fittedPairs().size(), 100u) << "the blocks' faces are fitted";
   CollisionDetector detector(topology.settings.collisions);
   detector.setFitted(simulator.fittedPairs());
   SimulationState state = simulator.state();
-  const Body& top = topology.bodies[1];
   const float skin = topology.settings.skin, baseTop = 0.2f;
-  std::vector<Index> sunk, inFront;
-  for (Index i = top.firstParticle; i < top.firstParticle + top.particleCount; ++i) {
+  SunkFit fit;
+  for (Index i = 0; i < Index(state.position.size()); ++i) {
     Vec3& x = state.position[i];
-    // Over the base (|x|, |z| < 0.3) and clear of its rim, where the base's top face is flat.
-    if (x.y() > baseTop + skin || std::abs(x.x()) > 0.25f || std::abs(x.z()) > 0.25f) continue;
+    // The top block's bottom, over the base and clear of its rim, where its top face is flat.
+    if (x.y() < baseTop + 0.1f * skin || x.y() > baseTop + skin || std::abs(x.x()) > 0.25f ||
+        std::abs(x.z()) > 0.25f)
+      continue;
     if (i % 2) {
       x.y() = baseTop - 20e-6f;
-      sunk.push_back(i);
+      fit.sunk.push_back(i);
     } else {
-      inFront.push_back(i);
+      fit.inFront.push_back(i);
     }
   }
-  ASSERT_GE(sunk.size(), 5u);
-  ASSERT_GE(inFront.size(), 5u);
   StepContacts contacts(topology, geometry);
   const std::span<const ContactStencil> stencils =
       contacts.find(topology, geometry, detector, state, Scalar(1) / 96);
-  const auto heldAt = [&](const ContactStencil& stencil) {
-    double c = stencil.offset;
-    for (int k = 0; k < 4; ++k)
-      if (stencil.particle[k] != ContactStencil::kFixed)
-        c += double(stencil.weight[k]) *
-             stencil.normal.cast<double>().dot(state.position[stencil.particle[k]].cast<double>());
-    return c;
-  };
-  for (Index v : sunk) {
+  fit.stencils.assign(stencils.begin(), stencils.end());
+  for (Index v : fit.sunk) {
     std::size_t held = 0;
     for (const ContactStencil& stencil : stencils) {
       if (stencil.particle[0] != v) continue;
@@ -463,13 +455,51 @@ TEST(InitialOverlap, AFittedVertexBehindItsMateIsHeldWhereItIsAndNeverPushed) {
       EXPECT_TRUE(stencil.fitted) << "vertex " << v;
       EXPECT_GT(stencil.normal.y(), 0.99f)
           << "vertex " << v << ": held to the side it was placed on";
-      EXPECT_NEAR(heldAt(stencil), 0, 1e-6) << "vertex " << v << ": held where it is";
+      double c = stencil.offset;
+      for (int k = 0; k < 4; ++k)
+        if (stencil.particle[k] != ContactStencil::kFixed)
+          c += double(stencil.weight[k]) * stencil.normal.cast<double>().dot(
+                                               state.position[stencil.particle[k]].cast<double>());
+      EXPECT_NEAR(c, 0, 1e-6) << "vertex " << v << ": held where it is";
     }
-    EXPECT_GE(held, 1u) << "vertex " << v << ", 20 µm behind the face it was fitted to";
+    EXPECT_GE(held, 1u) << "vertex " << v << ", 20 µm behind the face it was placed in front of";
   }
-  for (Index v : inFront)
-    for (const ContactStencil& stencil : stencils)
+  return fit;
+}
+
+/// Between parts: left to the failsafe, which counts a fitted crossing only beyond its separation
+/// and leaves one already crossed alone, such vertices of an engine sank 171 µm through their
+/// mates by frame 13. The vertices still in front get no stencil from the fit: a fit gives, and is
+/// never pushed.
+TEST(InitialOverlap, AFittedVertexBehindItsMateIsHeldWhereItIsAndNeverPushed) {
+  const SceneSetup scene = blockOnBlock(0.25f);
+  ASSERT_GT(Simulator(buildSceneTopology(scene)).fittedPairs().size(), 100u)
+      << "the blocks' faces are fitted";
+  const SunkFit fit = sinkIntoFit(scene);
+  ASSERT_GE(fit.sunk.size(), 5u);
+  ASSERT_GE(fit.inFront.size(), 5u);
+  for (Index v : fit.inFront)
+    for (const ContactStencil& stencil : fit.stencils)
       EXPECT_NE(stencil.particle[0], v) << "vertex " << v << ", still in front of its mate";
+}
+
+/// Within one closed surface (the two blocks as one body, its walls modelled closer than the
+/// skin): a vertex behind its own surface is inside it and otherwise left to the failsafe, which
+/// gives such meetings as it gives fits; one of an engine's parts went 110 µm through itself by
+/// frame 14.
+TEST(InitialOverlap, AVertexBehindItsOwnSurfaceWhereItWasPlacedInFrontIsHeldWhereItIs) {
+  SceneSetup scene = blockOnBlock(0.25f);
+  BodySetup& body = scene.bodies[0];
+  const TriangleMesh& top = scene.bodies[1].mesh;
+  const Index offset = Index(body.mesh.positions.size());
+  body.mesh.positions.insert(body.mesh.positions.end(), top.positions.begin(), top.positions.end());
+  for (Triangle triangle : top.triangles) {
+    for (Index& corner : triangle) corner += offset;
+    body.mesh.triangles.push_back(triangle);
+  }
+  scene.bodies.pop_back();
+  const SunkFit fit = sinkIntoFit(scene);
+  ASSERT_GE(fit.sunk.size(), 5u);
 }
 
 /// The block of the edge-push tests (|x| < 0.3, |y| < 0.1, |z| < 0.3) in rubber, without gravity,
