@@ -20,7 +20,8 @@
 /// still catch after the step: edge against edge, a vertex that slides over a triangle's edge, and
 /// whatever moved further than predicted. The pairs the detector sets aside or ignores are left
 /// alone here too; a vertex its own surface placed within the gap of a triangle (the walls and
-/// fillets of a CAD part, a folded sheet) is kept no closer than it was placed. The detector's
+/// fillets of a CAD part, a folded sheet) is kept no closer than it was placed, and once behind
+/// such a triangle of a closed surface (inside it), held where it is. The detector's
 /// fitted pairs (faces of two parts fitted closer than the skin) give as the failsafe lets them,
 /// but a vertex only they bring, once behind the face it was placed in front of, is held where it
 /// is: no deeper, never pushed out. Their stencils are marked `fitted`, and the solve never raises
