@@ -112,27 +112,20 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // it is: its spring stops it going deeper and never pushes it out, so the fit gives as before
   // and stores no energy. Left to the failsafe alone, which counts a fitted crossing only beyond
   // its separation and leaves one already crossed alone, such vertices of an engine sank through
-  // their mates 171 µm deep by frame 13 (bench/results/assemblies.md).
-  Scalar fit = -1;
+  // their mates 171 µm deep by frame 13 (bench/results/assemblies.md). Behind a closed surface is
+  // inside it (tangled, or left to the response and the failsafe), but a vertex its own closed
+  // surface placed in front of the triangle within the gap (a part's walls or fillets modelled
+  // closer than the skin) is held so too: the failsafe gives such meetings as it gives fits, and
+  // one of an engine's parts went 110 µm through itself by frame 14.
   const bool behind = distance < 0;
-  if (holdOnly && vertexSurface != surface && placedWithinGap()) {
-    const Scalar placed = placedInFront();
-    // Placed behind the face, the vertex is inside the other part: an overlap set aside, which
-    // may slide out of itself.
-    if (placed < 0 || distance >= 0) return;
-    fit = placed;
-  } else if (holdOnly) {
+  const bool closedBehind = behind && geometry.surfaceClosed[surface];
+  const bool hold = holdOnly ? vertexSurface != surface : closedBehind && vertexSurface == surface;
+  if (hold) {
+    // Still in front, it gives. Placed behind the face, it started inside: an overlap set aside,
+    // which may slide out of itself.
+    if (!behind || !placedWithinGap() || placedInFront() < 0) return;
+  } else if (holdOnly || closedBehind) {
     return;
-  } else if (behind && geometry.surfaceClosed[surface]) {
-    // Behind a closed surface is inside it: tangled, or left to the response and the failsafe.
-    // But for a vertex its own surface placed in front of the triangle within the gap (a part's
-    // walls or fillets modelled closer than the skin): the failsafe gives such meetings as it
-    // gives fits, and one of an engine's parts went 110 µm through itself by frame 14. It is held
-    // where it is, as a fit is.
-    if (vertexSurface != surface || !placedWithinGap()) return;
-    const Scalar placed = placedInFront();
-    if (placed < 0) return;
-    fit = placed;
   } else if (behind) {
     normal = -normal;
     distance = -distance;
@@ -184,12 +177,13 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // the normal as the stencil measures: held to the whole gap, each part pushed its own walls
   // apart and into the next part, and an engine of 115 parts took four times as long a step. (A
   // flat flag's vertices lie in the plane of all its triangles, but within the gap of few: its
-  // folds are held to the gap.) Fits between surfaces are held above.
-  if (fit < 0 && vertexSurface == surface && placedWithinGap()) {
+  // folds are held to the gap.) A hold (above) keeps the vertex where it is.
+  if (hold) {
+    keep = distance;
+  } else if (vertexSurface == surface && placedWithinGap()) {
     const Scalar placed = placedInFront();
     keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));
   }
-  if (fit >= 0) keep = std::min({keep, fit, distance});
   ContactStencil stencil;
   stencil.normal = normal;
   const std::array<Index, 4> vertices{v, corners[0], corners[1], corners[2]};
@@ -206,7 +200,7 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   stencil.offset = offset;
   stencil.friction =
       Scalar(std::sqrt(double(geometry.friction[surface]) * geometry.friction[vertexSurface]));
-  stencil.fitted = fit >= 0 || fittedSurface_[surface] || fittedSurface_[vertexSurface];
+  stencil.fitted = hold || fittedSurface_[surface] || fittedSurface_[vertexSurface];
   out.push_back({(std::uint64_t(v) << 32) | triangle, stencil});
 }
 

@@ -169,13 +169,18 @@ TEST(ContactSprings, ProductDiagonalAndRightHandSideMatchADenseReference) {
   EXPECT_EQ(contacts.row(3), ContactSprings::kNoRow);
 }
 
-TEST(ContactSprings, AnActiveSpringThatPullsIsLetGoAndOneThatEndsInsideIsTakenIn) {
-  // One particle against a fixed point below it along +y: C = y − y_fixed − gap.
+/// One particle against a fixed point below it along +y, with a 1 mm gap: C = y − y_fixed − gap.
+ContactStencil particleOverFixedPoint() {
   ContactStencil stencil;
   stencil.particle = {0, ContactStencil::kFixed, ContactStencil::kFixed, ContactStencil::kFixed};
   stencil.weight = {1, 0, 0, 0};
   stencil.normal = Vec3::UnitY();
   stencil.offset = -Scalar(0.001);
+  return stencil;
+}
+
+TEST(ContactSprings, AnActiveSpringThatPullsIsLetGoAndOneThatEndsInsideIsTakenIn) {
+  const ContactStencil stencil = particleOverFixedPoint();
   const std::vector<Scalar> inverseMass{1};
   ContactSprings contacts(1);
   contacts.set(std::span<const ContactStencil>(&stencil, 1), inverseMass.data());
@@ -203,11 +208,7 @@ TEST(ContactSprings, AnActiveSpringThatPullsIsLetGoAndOneThatEndsInsideIsTakenIn
 /// raised beside such holds pushed an assembly's fitted parts out of their fits (64 MJ in 2 s).
 TEST(ContactSprings, AFittedSpringKeepsItsOwnForceWhereAnOrdinaryOneIsRaised) {
   for (bool fitted : {false, true}) {
-    ContactStencil stencil;
-    stencil.particle = {0, ContactStencil::kFixed, ContactStencil::kFixed, ContactStencil::kFixed};
-    stencil.weight = {1, 0, 0, 0};
-    stencil.normal = Vec3::UnitY();
-    stencil.offset = -Scalar(0.001);
+    ContactStencil stencil = particleOverFixedPoint();
     stencil.fitted = fitted;
     const std::vector<Scalar> inverseMass{1};
     ContactSprings contacts(1);
