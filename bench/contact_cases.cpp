@@ -28,10 +28,11 @@
 // any motion may round them across; the pairs that stood further apart crossed a real gap.
 //
 // --deep=MICRONS names on stderr, at each frame's end, every new pair where none overlapped that
-// is deeper than MICRONS: its triangles, their surfaces, its depth, how far apart they started,
-// and whether the simulator took it for fitted (closer than the skin at the start) and its
-// surfaces for overlapping at the start (its own test, which counts touching within rounding; the
-// exact checker's "none overlapped" does not). What the engine's deep pairs were traced by,
+// is deeper than MICRONS: its triangles, their surfaces, its depth, how many edges of each go
+// through the other (two of one: a corner through a face; one of each: edge against edge), how
+// far apart they started, and whether the simulator took it for fitted (closer than the skin at
+// the start) and its surfaces for overlapping at the start (its own test, which counts touching
+// within rounding; the exact checker's "none overlapped" does not). What the engine's deep pairs were traced by,
 // sessions running, with a temporary print.
 #include <algorithm>
 #include <chrono>
@@ -189,11 +190,13 @@ int main(int argc, char** argv) {
                                      std::max(pair.first, pair.second)};
           const bool fitted = std::binary_search(simulator.fittedPairs().begin(),
                                                  simulator.fittedPairs().end(), ordered);
+          const std::array<int, 2> through = test::edgesThrough(geometry.corners(at, pair.first),
+                                                                geometry.corners(at, pair.second));
           std::fprintf(stderr,
-                       "deep frame %d: triangles %u and %u, surfaces %u and %u, %.1f µm, %.1f µm "
-                       "apart at the start%s%s%s\n",
+                       "deep frame %d: triangles %u and %u, surfaces %u and %u, %.1f µm, edges "
+                       "through %d and %d, %.1f µm apart at the start%s%s%s\n",
                        frame, unsigned(pair.first), unsigned(pair.second), unsigned(a), unsigned(b),
-                       1e6 * depth,
+                       1e6 * depth, through[0], through[1],
                        1e6 * test::triangleDistance(geometry.corners(startPosition, pair.first),
                                                     geometry.corners(startPosition, pair.second)),
                        fitted ? ", fitted" : "",

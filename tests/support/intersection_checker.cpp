@@ -122,6 +122,16 @@ double triangleDistance(const TriangleCorners& a, const TriangleCorners& b) {
   return distance;
 }
 
+std::array<int, 2> edgesThrough(const TriangleCorners& a, const TriangleCorners& b) {
+  const std::array<Vec3d, 3> p = inDouble(a), q = inDouble(b);
+  std::array<int, 2> count{0, 0};
+  for (int k = 0; k < 3; ++k) {
+    count[0] += detail::segmentMeetsTriangle(p[k], p[(k + 1) % 3], q);
+    count[1] += detail::segmentMeetsTriangle(q[k], q[(k + 1) % 3], p);
+  }
+  return count;
+}
+
 bool touchingWithinRounding(const TriangleCorners& a, const TriangleCorners& b) {
   double largest = 0;
   for (const TriangleCorners* corners : {&a, &b})

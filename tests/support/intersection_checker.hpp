@@ -16,6 +16,7 @@
 ///   one touch there by construction; a fold across a shared edge or vertex is not counted).
 /// Zero-area triangles are skipped: they have no inside to cross.
 
+#include <array>
 #include <cstddef>
 #include <map>
 #include <span>
@@ -53,6 +54,12 @@ double penetrationDepth(const TriangleCorners& a, const TriangleCorners& b);
 /// The distance between two closed triangles, in double: the least over each one's edges of the
 /// edge's distance from the other triangle; 0 where they meet.
 double triangleDistance(const TriangleCorners& a, const TriangleCorners& b);
+
+/// How two intersecting triangles cross: how many edges of `a` meet `b`, and how many of `b` meet
+/// `a`, in double. Two of one and none of the other: a corner of that one has gone through the
+/// other's face, which a vertex–face contact sees. One of each: their edges are linked, a crossing
+/// of edge against edge that no corner of either shows.
+std::array<int, 2> edgesThrough(const TriangleCorners& a, const TriangleCorners& b);
 
 /// Float spacings within which two triangles count as touching (see touchingWithinRounding()).
 inline constexpr double kTouchingSpacings = 4;
