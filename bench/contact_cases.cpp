@@ -14,8 +14,10 @@
 // instep keeps the contacts apart within the implicit solve (collisions.contactsInStep).
 //
 // --csv=FILE appends one row per frame to FILE (scene, variant, frame, intersecting pairs between
-// bodies and within one, contacts per substep, energy above the start in J, and the new pairs),
-// with a header when FILE is new: what bench/plot_bench.py contacts draws.
+// bodies and within one, contacts per substep, energy above the start in J, the new pairs, and
+// the bodies the failsafe's last resort put back where their substep started, at rest: bodies
+// stopped dead, however clean the frame), with a header when FILE is new: what
+// bench/plot_bench.py contacts draws.
 //
 // New pairs: the intersecting triangle pairs of a frame that did not intersect at the start (what
 // the scene placed overlapping is set aside, and its pairs may slide), and of those the ones
@@ -32,8 +34,8 @@
 // through the other (two of one: a corner through a face; one of each: edge against edge), how
 // far apart they started, and whether the simulator took it for fitted (closer than the skin at
 // the start) and its surfaces for overlapping at the start (its own test, which counts touching
-// within rounding; the exact checker's "none overlapped" does not). What the engine's deep pairs were traced by,
-// sessions running, with a temporary print.
+// within rounding; the exact checker's "none overlapped" does not). What the engine's deep pairs
+// were traced by, sessions running, with a temporary print.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -105,7 +107,7 @@ int main(int argc, char** argv) {
       std::fprintf(csv,
                    "scene,variant,frame,between,within,contacts_per_substep,energy_above,"
                    "new_pairs,new_where_none,deepest_new_where_none,new_apart_at_start,"
-                   "deepest_new_apart_at_start\n");
+                   "deepest_new_apart_at_start,frozen_bodies\n");
   }
   try {
     // A mesh file is the scene `softbake run FILE` makes of it.
@@ -220,11 +222,12 @@ int main(int argc, char** argv) {
       highest = std::max(highest, energy);
       if (csv)
         std::fprintf(
-            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g,%zu,%.3g\n",
+            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g,%zu,%.3g,%zu\n",
             std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(), frame,
             count.betweenSurfaces, count.withinSurfaces,
             double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
-            energy - start, newPairs, newWhereNone, deepest, newApart, deepestApart);
+            energy - start, newPairs, newWhereNone, deepest, newApart, deepestApart,
+            simulator.lastFrameStats().failsafe.frozenBodies);
       // Each frame's row as it is made: a long bake cut short by a time limit keeps its frames.
       if (csv) std::fflush(csv);
     }

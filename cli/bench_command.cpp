@@ -93,7 +93,8 @@ struct StepRecord {
   std::uint64_t solverIterations = 0;  ///< the implicit integrator's CG iterations, all steps
   std::uint64_t solverPhases = 0;      ///< and the phases of its parallel regions
   std::uint64_t failsafePasses = 0;    ///< the failsafe's detection passes, all steps
-  std::uint64_t frozenSubsteps = 0;    ///< substeps the failsafe ended at their start
+  std::uint64_t frozenSubsteps = 0;    ///< substeps that reached the failsafe's last resort
+  std::uint64_t frozenBodies = 0;      ///< and the bodies it put back at their substep's start
   /// The largest |V/V_rest − 1| of any closed body at the end of any frame: how round the bodies
   /// stayed, the measure peers are compared at.
   double maxVolumeError = 0;
@@ -156,6 +157,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       const FailsafeStats& after = simulator.lastFrameStats().failsafe;
       record.failsafePasses += after.passes - before.passes;
       record.frozenSubsteps += after.frozen - before.frozen;
+      record.frozenBodies += after.frozenBodies - before.frozenBodies;
     }
     record.framesSimulated += double(substep) / substeps;
     if (substep < substeps) break;  // the step limit ended the run inside this frame
@@ -229,9 +231,12 @@ double printContactsAndExports(const StepRecord& record, const std::vector<Expor
   const double contactsPerStep = contactSum / double(steps);
   std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
               contactsPerStep, contactMax, pairSum / double(steps));
-  std::printf("  failsafe passes per step: mean %.1f; substeps it ended at their start: %llu\n",
-              double(record.failsafePasses) / double(steps),
-              static_cast<unsigned long long>(record.frozenSubsteps));
+  std::printf(
+      "  failsafe passes per step: mean %.1f; substeps whose last resort put bodies back at "
+      "their start: %llu (%llu bodies)\n",
+      double(record.failsafePasses) / double(steps),
+      static_cast<unsigned long long>(record.frozenSubsteps),
+      static_cast<unsigned long long>(record.frozenBodies));
   for (const ExportTiming& e : exports) {
     const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
     std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
@@ -333,7 +338,7 @@ int bench(const BenchOptions& options) {
         "solver_phases_per_step=%.1f "
         "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu fitted_start=%zu "
         "fitted_end=%zu "
-        "failsafe_passes_per_step=%.1f frozen_substeps=%llu\n",
+        "failsafe_passes_per_step=%.1f frozen_substeps=%llu frozen_bodies=%llu\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
@@ -344,7 +349,8 @@ int bench(const BenchOptions& options) {
         simulator.initiallySetAsidePairs(), simulator.setAsidePairs().size(),
         simulator.initialOverlaps().close.size(), simulator.fittedPairs().size(),
         double(record.failsafePasses) / double(steps),
-        static_cast<unsigned long long>(record.frozenSubsteps));
+        static_cast<unsigned long long>(record.frozenSubsteps),
+        static_cast<unsigned long long>(record.frozenBodies));
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record);
   }

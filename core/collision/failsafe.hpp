@@ -27,8 +27,11 @@
 ///    and a zone that holds a pinned particle, a static vertex or a particle on a plane stays
 ///    where it started. The zones grow until nothing meets. A translating pass that finds the very
 ///    meetings of the pass before cannot part them, so the zones then stay where they started.
-/// 3. Should that still leave meetings after many passes, every particle stays where the substep
-///    started: the state that was free of crossings. Counted, never expected.
+/// 3. Should that still leave meetings after many passes, every body of a meeting goes back to
+///    where the substep started, at rest, and is measured again, until nothing meets: the start
+///    was free of crossings, so a body there meets nothing else that is there, and each pass puts
+///    back at least one more body. Bodies that met nothing keep their substep. Counted, never
+///    expected.
 ///
 /// A meeting of two primitives that were closer than the separation in the scene's initial state
 /// (a mesh finer than the skin, a sheet thinner than its thickness, parts of an assembly fitted
@@ -97,13 +100,15 @@ double openSurfaceThickness(const SceneTopology& topology, const Body& body);
 struct FailsafeStats {
   std::size_t impacts = 0;        ///< meetings found over all passes
   std::size_t zoneParticles = 0;  ///< particles moved as part of an impact zone
-  std::size_t frozen = 0;         ///< substeps that fell back to the start (stage 3)
+  std::size_t frozen = 0;         ///< substeps that reached stage 3
+  std::size_t frozenBodies = 0;   ///< bodies stage 3 put back where their substep started
   std::size_t passes = 0;         ///< detection passes run
 
   FailsafeStats& operator+=(const FailsafeStats& other) {
     impacts += other.impacts;
     zoneParticles += other.zoneParticles;
     frozen += other.frozen;
+    frozenBodies += other.frozenBodies;
     passes += other.passes;
     return *this;
   }
@@ -191,6 +196,10 @@ class CollisionFailsafe {
   void applyImpulses(const SceneTopology& topology, const CollisionGeometry& geometry,
                      SimulationState& state);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
+  /// Stage 3: every particle of each body of the latest meetings back where the substep started,
+  /// at rest; returns how many bodies.
+  std::size_t putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
+                            std::span<const Vec3> start, SimulationState& state);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
   /// in zones.
   std::size_t moveZones(const SceneTopology& topology, const CollisionGeometry& geometry,
@@ -232,6 +241,7 @@ class CollisionFailsafe {
   std::vector<Index> zoneParent_;   ///< union–find over particles; zoneParent_[v] == v: a root
   std::vector<Index> zoneMembers_;  ///< scratch: particles of zones, grouped by root
   std::vector<std::uint8_t> inZone_;
+  std::vector<std::uint8_t> bodyBack_;  ///< scratch, per body: stage 3 puts it back
   std::vector<std::uint8_t>
       zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
   std::vector<double> zoneMass_;  ///< per zone root, and its momentum over the substep:
