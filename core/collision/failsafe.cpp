@@ -131,6 +131,8 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   onPlane_.assign(geometry.particleCount, 0);
   inZone_.assign(geometry.particleCount, 0);
   bodyBack_.assign(topology.bodies.size(), 0);
+  assemblyBack_.assign(topology.bodies.size(), 0);
+  bodyRoot_.resize(topology.bodies.size());
   zoneParent_.resize(geometry.particleCount);
   std::iota(zoneParent_.begin(), zoneParent_.end(), Index(0));
   zoneFixed_.assign(geometry.particleCount, 0);
@@ -184,13 +186,13 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
       std::copy(start.begin(), start.begin() + Index(state.position.size()),
                 state.position.begin());
       std::fill(state.velocity.begin(), state.velocity.end(), Vec3::Zero());
+      stats.frozen += pass == passes;
       stats.frozenBodies += topology.bodies.size();
     } else if (pass >= passes) {
-      // Stage 3: the bodies of what still meets go back to where they started, at rest. Every
-      // particle of the scene put back in one go stopped all 115 parts of a falling engine dead
-      // on three of its first 15 frames, for meetings of a few of them.
+      // Stage 3: the bodies of what still meets go back to where they started, at rest. The
+      // whole scene put back in one go stopped every body dead for a meeting of two.
       stats.frozen += pass == passes;
-      stats.frozenBodies += putBodiesBack(topology, geometry, start, state);
+      stats.frozenBodies += putBodiesBack(topology, geometry, detector, start, state);
     } else if (pass < passes_.impulses) {
       applyImpulses(topology, geometry, state);
       // Measured again next pass, with the meetings the impulses moved.
@@ -213,6 +215,7 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
     keepAbovePlanes(topology, state, dt);
   }
   clearZones();
+  if (stats.frozen) std::fill(bodyBack_.begin(), bodyBack_.end(), 0);
   return stats;
 }
 
@@ -619,10 +622,23 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
 
 std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
                                              const CollisionGeometry& geometry,
+                                             const CollisionDetector& detector,
                                              std::span<const Vec3> start, SimulationState& state) {
   const Index particles = geometry.particleCount;
+  const auto bodyOf = [&](Index triangle) {
+    const Index v = geometry.triangleVertices[triangle][0];
+    return v < particles ? topology.particleBody[v] : ~Index(0);
+  };
+  // An assembly goes back whole: parts fitted onto each other that were left a substep apart
+  // would start their next one a substep's travel out of their fits.
+  std::iota(bodyRoot_.begin(), bodyRoot_.end(), Index(0));
+  for (const TrianglePair& pair : detector.fittedPairs()) {
+    const Index a = bodyOf(pair.first), b = bodyOf(pair.second);
+    if (a != ~Index(0) && b != ~Index(0))
+      joinRoots(bodyRoot_, findRoot(bodyRoot_, a), findRoot(bodyRoot_, b));
+  }
   const auto mark = [&](Index v) {
-    if (v < particles) bodyBack_[topology.particleBody[v]] = 1;
+    if (v < particles) assemblyBack_[findRoot(bodyRoot_, topology.particleBody[v])] = 1;
   };
   for (const FailsafeImpact& meeting : impacts_)
     for (Index v : meeting.vertex) mark(v);
@@ -631,8 +647,8 @@ std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
       for (Index v : geometry.triangleVertices[t]) mark(v);
   std::size_t count = 0;
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
-    if (!bodyBack_[b]) continue;
-    bodyBack_[b] = 0;
+    if (bodyBack_[b] || !assemblyBack_[findRoot(bodyRoot_, Index(b))]) continue;
+    bodyBack_[b] = 1;
     ++count;
     const Body& body = topology.bodies[b];
     for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
@@ -641,6 +657,7 @@ std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
       moved_[p] = 1;
     }
   }
+  std::fill(assemblyBack_.begin(), assemblyBack_.end(), 0);
   return count;
 }
 

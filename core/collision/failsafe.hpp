@@ -28,10 +28,10 @@
 ///    where it started. The zones grow until nothing meets. A translating pass that finds the very
 ///    meetings of the pass before cannot part them, so the zones then stay where they started.
 /// 3. Should that still leave meetings after many passes, every body of a meeting goes back to
-///    where the substep started, at rest, and is measured again, until nothing meets: the start
-///    was free of crossings, so a body there meets nothing else that is there, and each pass puts
-///    back at least one more body. Bodies that met nothing keep their substep. Counted, never
-///    expected.
+///    where the substep started, at rest, with every body fitted onto it (an assembly goes back
+///    whole), and is measured again, until nothing meets: the start was free of crossings, so a
+///    body there meets nothing else that is there, and each pass puts back at least one more
+///    body. Bodies that met nothing keep their substep. Counted, never expected.
 ///
 /// A meeting of two primitives that were closer than the separation in the scene's initial state
 /// (a mesh finer than the skin, a sheet thinner than its thickness, parts of an assembly fitted
@@ -196,10 +196,12 @@ class CollisionFailsafe {
   void applyImpulses(const SceneTopology& topology, const CollisionGeometry& geometry,
                      SimulationState& state);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
-  /// Stage 3: every particle of each body of the latest meetings back where the substep started,
-  /// at rest; returns how many bodies.
+  /// Stage 3: every particle of each body of the latest meetings, and of every body fitted onto
+  /// one of those (the detector's fitted pairs, joined over), back where the substep started, at
+  /// rest; returns how many bodies.
   std::size_t putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
-                            std::span<const Vec3> start, SimulationState& state);
+                            const CollisionDetector& detector, std::span<const Vec3> start,
+                            SimulationState& state);
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
   /// in zones.
   std::size_t moveZones(const SceneTopology& topology, const CollisionGeometry& geometry,
@@ -241,7 +243,9 @@ class CollisionFailsafe {
   std::vector<Index> zoneParent_;   ///< union–find over particles; zoneParent_[v] == v: a root
   std::vector<Index> zoneMembers_;  ///< scratch: particles of zones, grouped by root
   std::vector<std::uint8_t> inZone_;
-  std::vector<std::uint8_t> bodyBack_;  ///< scratch, per body: stage 3 puts it back
+  std::vector<std::uint8_t> bodyBack_;      ///< per body: put back by this substep's stage 3
+  std::vector<std::uint8_t> assemblyBack_;  ///< scratch, per assembly root: a pass puts it back
+  std::vector<Index> bodyRoot_;  ///< scratch: union–find over bodies by their fitted pairs
   std::vector<std::uint8_t>
       zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
   std::vector<double> zoneMass_;  ///< per zone root, and its momentum over the substep:
