@@ -191,8 +191,11 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
     } else if (pass >= passes) {
       // Stage 3: the bodies of what still meets go back to where they started, at rest. The
       // whole scene put back in one go stopped every body dead for a meeting of two.
-      stats.frozen += pass == passes;
-      stats.frozenBodies += putBodiesBack(topology, geometry, detector, start, state);
+      if (pass == passes) {
+        ++stats.frozen;
+        joinFittedBodies(topology, geometry, detector);
+      }
+      stats.frozenBodies += putBodiesBack(topology, geometry, start, state);
     } else if (pass < passes_.impulses) {
       applyImpulses(topology, geometry, state);
       // Measured again next pass, with the meetings the impulses moved.
@@ -552,6 +555,17 @@ Index CollisionFailsafe::zoneOf(Index v) {
   return findRoot(zoneParent_, v);
 }
 
+template <class Visit>
+void CollisionFailsafe::forEachMeeting(const CollisionGeometry& geometry, Visit&& visit) const {
+  for (const FailsafeImpact& meeting : impacts_) visit(std::span<const Index>(meeting.vertex));
+  for (const TrianglePair& crossing : crossings_) {
+    const Triangle& a = geometry.triangleVertices[crossing.first];
+    const Triangle& b = geometry.triangleVertices[crossing.second];
+    const std::array<Index, 6> corners{a[0], a[1], a[2], b[0], b[1], b[2]};
+    visit(std::span<const Index>(corners));
+  }
+}
+
 std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
                                          const CollisionGeometry& geometry,
                                          std::span<const Vec3> start, SimulationState& state,
@@ -585,13 +599,7 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
     }
     if (root != ~Index(0) && fixed) zoneFixed_[root] = 1;
   };
-  for (const FailsafeImpact& meeting : impacts_) unite(meeting.vertex);
-  for (const TrianglePair& crossing : crossings_) {
-    const Triangle& a = geometry.triangleVertices[crossing.first];
-    const Triangle& b = geometry.triangleVertices[crossing.second];
-    const std::array<Index, 6> corners{a[0], a[1], a[2], b[0], b[1], b[2]};
-    unite(corners);
-  }
+  forEachMeeting(geometry, unite);
   for (Index v : zoneMembers_) {
     const Index root = zoneOf(v);
     if (onPlane_[v]) zoneFixed_[root] = 1;
@@ -620,14 +628,12 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
   return zoneMembers_.size();
 }
 
-std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
-                                             const CollisionGeometry& geometry,
-                                             const CollisionDetector& detector,
-                                             std::span<const Vec3> start, SimulationState& state) {
-  const Index particles = geometry.particleCount;
+void CollisionFailsafe::joinFittedBodies(const SceneTopology& topology,
+                                         const CollisionGeometry& geometry,
+                                         const CollisionDetector& detector) {
   const auto bodyOf = [&](Index triangle) {
     const Index v = geometry.triangleVertices[triangle][0];
-    return v < particles ? topology.particleBody[v] : ~Index(0);
+    return v < geometry.particleCount ? topology.particleBody[v] : ~Index(0);
   };
   // An assembly goes back whole: parts fitted onto each other that were left a substep apart
   // would start their next one a substep's travel out of their fits.
@@ -637,14 +643,16 @@ std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
     if (a != ~Index(0) && b != ~Index(0))
       joinRoots(bodyRoot_, findRoot(bodyRoot_, a), findRoot(bodyRoot_, b));
   }
-  const auto mark = [&](Index v) {
-    if (v < particles) assemblyBack_[findRoot(bodyRoot_, topology.particleBody[v])] = 1;
-  };
-  for (const FailsafeImpact& meeting : impacts_)
-    for (Index v : meeting.vertex) mark(v);
-  for (const TrianglePair& crossing : crossings_)
-    for (Index t : {crossing.first, crossing.second})
-      for (Index v : geometry.triangleVertices[t]) mark(v);
+}
+
+std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
+                                             const CollisionGeometry& geometry,
+                                             std::span<const Vec3> start, SimulationState& state) {
+  const Index particles = geometry.particleCount;
+  forEachMeeting(geometry, [&](std::span<const Index> vertices) {
+    for (Index v : vertices)
+      if (v < particles) assemblyBack_[findRoot(bodyRoot_, topology.particleBody[v])] = 1;
+  });
   std::size_t count = 0;
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
     if (bodyBack_[b] || !assemblyBack_[findRoot(bodyRoot_, Index(b))]) continue;

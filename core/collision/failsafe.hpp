@@ -196,12 +196,19 @@ class CollisionFailsafe {
   void applyImpulses(const SceneTopology& topology, const CollisionGeometry& geometry,
                      SimulationState& state);
   void keepAbovePlanes(const SceneTopology& topology, SimulationState& state, double dt);
-  /// Stage 3: every particle of each body of the latest meetings, and of every body fitted onto
-  /// one of those (the detector's fitted pairs, joined over), back where the substep started, at
-  /// rest; returns how many bodies.
+  /// Joins the bodies that the detector's fitted pairs join into assemblies (bodyRoot_): once per
+  /// substep that reaches stage 3, as the fitted pairs change only between frames.
+  void joinFittedBodies(const SceneTopology& topology, const CollisionGeometry& geometry,
+                        const CollisionDetector& detector);
+  /// Stage 3: every particle of each assembly (joinFittedBodies()) that holds a body of the latest
+  /// meetings, back where the substep started, at rest; returns how many bodies it put back that
+  /// were not back already.
   std::size_t putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
-                            const CollisionDetector& detector, std::span<const Vec3> start,
-                            SimulationState& state);
+                            std::span<const Vec3> start, SimulationState& state);
+  /// Calls `visit` with the vertices of each of the latest meetings: a meeting's four, a
+  /// crossing's six corners.
+  template <class Visit>
+  void forEachMeeting(const CollisionGeometry& geometry, Visit&& visit) const;
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
   /// in zones.
   std::size_t moveZones(const SceneTopology& topology, const CollisionGeometry& geometry,
