@@ -260,6 +260,27 @@ TEST(Failsafe, AMeetingCarriedAlongWithItsNeighbourIsNoMeeting) {
                            velocity.size() * sizeof(Vec3)));
 }
 
+constexpr float kFittedGap = 13e-6f;
+
+/// A sheet and a near-copy of it kFittedGap above, shifted sideways: fitted, closer than the skin.
+std::vector<BodySetup> fittedSheets() {
+  std::vector<BodySetup> bodies{sheet(Vec3f(0, 0, 0), 0.6f, 6),
+                                sheet(Vec3f(0.031f, kFittedGap, 0.017f), 0.6f, 6)};
+  bodies[1].name = "copy";
+  return bodies;
+}
+
+/// Turns the copy of fittedSheets() (body 1) against the lower sheet within the substep, one side
+/// down by twice the gap: by less than the separation a fit may give by.
+void turnCopyDown(Substep& step) {
+  const Body& copy = step.scene.topology.bodies[1];
+  for (Index p = copy.firstParticle; p < copy.firstParticle + copy.particleCount; ++p) {
+    const Scalar down = 2 * kFittedGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
+    step.scene.state.position[p].y() -= down;
+    step.scene.state.velocity[p].y() = -down / Scalar(kDt);
+  }
+}
+
 /// Two sheets modelled as near-copies of each other, 13 µm apart (parts of an imported model: a
 /// spider's two shells), are fitted: closer than the skin where the scene starts, so the failsafe
 /// leaves them to give. Within one substep the upper one comes down onto the lower one's plane (as
@@ -267,19 +288,12 @@ TEST(Failsafe, AMeetingCarriedAlongWithItsNeighbourIsNoMeeting) {
 /// by twice the gap: by less than the separation a fit may give by. Either way they would end
 /// intersecting; they must not.
 TEST(Failsafe, FittedNearCopiesThatMeetWithinTheFitEndApart) {
-  constexpr float kGap = 13e-6f;
   for (const bool turn : {false, true}) {
     SCOPED_TRACE(turn ? "turned against the lower sheet" : "onto the lower sheet's plane");
     SceneSetup setup = noGravity();
-    setup.bodies = {sheet(Vec3f(0, 0, 0), 0.6f, 6), sheet(Vec3f(0.031f, kGap, 0.017f), 0.6f, 6)};
-    setup.bodies[1].name = "copy";
-    Substep step(setup, {Vec3(0, 0, 0), Vec3(0, turn ? 0 : -kGap, 0)});
-    const Body& copy = step.scene.topology.bodies[1];
-    for (Index p = copy.firstParticle; turn && p < copy.firstParticle + copy.particleCount; ++p) {
-      const Scalar down = 2 * kGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
-      step.scene.state.position[p].y() -= down;
-      step.scene.state.velocity[p].y() = -down / Scalar(kDt);
-    }
+    setup.bodies = fittedSheets();
+    Substep step(setup, {Vec3(0, 0, 0), Vec3(0, turn ? 0 : -kFittedGap, 0)});
+    if (turn) turnCopyDown(step);
     ASSERT_EQ(
         test::countIntersectingPairs(step.scene.collision, step.scene.substepStart).betweenSurfaces,
         0u);
@@ -378,31 +392,24 @@ TEST(Failsafe, ZonesThatStayWhereTheyStartedAndTheLastResortEndCrossingFree) {
 // left at their start, turn their neighbours against the other sheet, so meetings are left for
 // stage 3. It used to put every particle back, a ball that met nothing included.
 TEST(Failsafe, TheLastResortPutsBackTheBodiesThatMeetAndNoOther) {
-  constexpr float kGap = 13e-6f;
   SceneSetup setup = noGravity();
-  setup.bodies = {sheet(Vec3f(0, 0, 0), 0.6f, 6), sheet(Vec3f(0.031f, kGap, 0.017f), 0.6f, 6),
-                  ball("apart", Vec3f(3, 0, 0))};
-  setup.bodies[1].name = "copy";
+  setup.bodies = fittedSheets();
+  setup.bodies.push_back(ball("apart", Vec3f(3, 0, 0)));
   const Vec3 flight(0.05f, 0, 0);
   Substep step(setup, {Vec3(0, 0, 0), Vec3(0, 0, 0), flight},
                FailsafePasses{.impulses = 0, .translatingZones = 0, .zones = 1});
-  const Body& copy = step.scene.topology.bodies[1];
-  for (Index p = copy.firstParticle; p < copy.firstParticle + copy.particleCount; ++p) {
-    const Scalar down = 2 * kGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
-    step.scene.state.position[p].y() -= down;
-    step.scene.state.velocity[p].y() = -down / Scalar(kDt);
-  }
+  turnCopyDown(step);
   ASSERT_GT(step.intersections().betweenSurfaces, 0u) << "left alone, the sheets would meet";
   const std::vector<Vec3> moved = step.scene.state.position;
   const FailsafeStats stats = step.apply();
   EXPECT_EQ(stats.frozen, 1u);
   EXPECT_EQ(stats.frozenBodies, 2u);
   EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
-  for (Index p = 0; p < copy.firstParticle + copy.particleCount; ++p) {
+  const Body& apart = step.scene.topology.bodies[2];
+  for (Index p = 0; p < apart.firstParticle; ++p) {
     ASSERT_EQ(step.scene.state.position[p], step.scene.substepStart[p]) << p;
     ASSERT_EQ(step.scene.state.velocity[p], Vec3::Zero()) << p;
   }
-  const Body& apart = step.scene.topology.bodies[2];
   for (Index p = apart.firstParticle; p < apart.firstParticle + apart.particleCount; ++p) {
     ASSERT_EQ(step.scene.state.position[p], moved[p]) << p;
     ASSERT_EQ(step.scene.state.velocity[p], flight / Scalar(kDt)) << p;
@@ -413,11 +420,9 @@ TEST(Failsafe, TheLastResortPutsBackTheBodiesThatMeetAndNoOther) {
 // substep and meeting nothing, is put back with the sheets, or its next substep would start a
 // substep's travel out of its fit.
 TEST(Failsafe, TheLastResortPutsBackAFittedAssemblyWhole) {
-  constexpr float kGap = 13e-6f;
   SceneSetup setup = noGravity();
-  setup.bodies = {sheet(Vec3f(0, 0, 0), 0.6f, 6), sheet(Vec3f(0.031f, kGap, 0.017f), 0.6f, 6),
-                  sheet(Vec3f(0.062f, 2 * kGap, 0.034f), 0.6f, 6)};
-  setup.bodies[1].name = "copy";
+  setup.bodies = fittedSheets();
+  setup.bodies.push_back(sheet(Vec3f(0.062f, 2 * kFittedGap, 0.034f), 0.6f, 6));
   setup.bodies[2].name = "lid";
   Substep step(setup, {Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0.001f, 0, 0)},
                FailsafePasses{.impulses = 0, .translatingZones = 0, .zones = 1});
@@ -425,12 +430,7 @@ TEST(Failsafe, TheLastResortPutsBackAFittedAssemblyWhole) {
       findInitialOverlaps(step.scene.topology, step.scene.collision, step.scene.substepStart, 1e-3f)
           .close);
   ASSERT_FALSE(step.detector.fittedPairs().empty());
-  const Body& copy = step.scene.topology.bodies[1];
-  for (Index p = copy.firstParticle; p < copy.firstParticle + copy.particleCount; ++p) {
-    const Scalar down = 2 * kGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
-    step.scene.state.position[p].y() -= down;
-    step.scene.state.velocity[p].y() = -down / Scalar(kDt);
-  }
+  turnCopyDown(step);
   const FailsafeStats stats = step.apply();
   EXPECT_EQ(stats.frozen, 1u);
   EXPECT_EQ(stats.frozenBodies, 3u);
