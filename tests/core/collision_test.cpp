@@ -201,6 +201,70 @@ TEST(CollisionResponse, ParticleLeavingAClosedBodyIsNotPushedBackIn) {
   EXPECT_EQ(staged.state.position[0], end);
 }
 
+/// A crossing further back along the particle's path than its own longest edge: the paper's
+/// target, 1.2 away, would stretch its springs past their length in one substep. It moves its
+/// longest edge, out of the surface first: it ends the skin above the floor.
+TEST(CollisionResponse, AFarCrossingMovesTheParticleItsLongestEdgeAndOutOfTheSurface) {
+  TriangleMesh floor;
+  addSquare(floor, Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(1, 0, 0));  // normal +y, x in [-1, 1]
+  test::StagedScene staged(
+      buildSceneTopology(particleOverStatic(Vec3f(-2.0f, 0.1f, 0.05f), floor)));
+  const Scalar skin = staged.topology.settings.skin;
+  // From (-2, 0.1) to (0.4, -0.1): crosses y = 0 at x = -0.8, 1.2 behind the end.
+  const Vec3 end(0.4f, -0.1f, 0.05f);
+  const std::vector<Contact> contacts =
+      collideOnce(staged, end, Vec3(24, -2, 0), ResponseMode::Paper);
+  const Contact* contact = findParticleContact(contacts, 0);
+  ASSERT_NE(contact, nullptr);
+  ASSERT_TRUE(contact->position.isApprox(Vec3(-0.8f, 0, 0.05f), 1e-5f));
+  // Its longest edge at the end: to the pinned corner (0.6, 0.6, -0.3).
+  const Scalar longest = (Vec3(0.6f, 0.6f, -0.3f) - end).norm();
+  const Vec3& now = staged.state.position[0];
+  EXPECT_NEAR((now - end).norm(), longest, 1e-5);
+  EXPECT_NEAR(now.y(), skin, 1e-5) << "out of the floor, by the skin";
+  EXPECT_LT(now.x(), end.x()) << "and back along the floor towards the crossing";
+}
+
+/// A light corner struck near it, beside pinned ones, took 1/w of the correction: w = 0.2 moved
+/// it five times the shift. No vertex moves further than the correction itself.
+TEST(CollisionResponse, NoVertexMovesFurtherThanTheCorrection) {
+  SceneSetup scene;
+  scene.settings.gravity.setZero();
+  BodySetup sheet;
+  sheet.name = "sheet";
+  sheet.mesh.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+  sheet.mesh.triangles = {{0, 1, 2}};
+  sheet.pins.particles = {1, 2};
+  sheet.mass = Scalar(0.001);
+  scene.bodies.push_back(sheet);
+  BodySetup dart;
+  dart.name = "dart";
+  dart.mesh.positions = {Vec3f(0.6f, 0.2f, 0.1f), Vec3f(2, 2, 0.4f), Vec3f(2, 1.8f, 0.5f)};
+  dart.mesh.triangles = {{0, 1, 2}};
+  dart.pins.particles = {1, 2};
+  scene.bodies.push_back(dart);
+  test::StagedScene staged(buildSceneTopology(scene));
+  const Index tip = 3;  // the sheet's three particles come first
+  const Scalar skin = staged.topology.settings.skin;
+  ASSERT_GT(staged.topology.inverseMass[0], 100 * staged.topology.inverseMass[tip]);
+  staged.substepStart = staged.state.position;
+  const Vec3 end(0.6f, 0.2f, -0.1f);  // through the sheet at barycentric (0.2, 0.6, 0.2)
+  staged.state.position[tip] = end;
+  staged.state.velocity[tip] = Vec3(0, 0, -4.8f);
+  CollisionDetector detector(staged.topology.settings.collisions);
+  detector.detect(staged.topology, staged.collision, {staged.substepStart, staged.state.position});
+  ASSERT_EQ(detector.particleContacts().size(), 1u);
+  std::vector<Contact> contacts;
+  EdgePushes edgePushes(staged.topology.particleCount());
+  respondToCollisions(staged.topology, staged.collision, detector, ResponseMode::TwoSided,
+                      staged.state, contacts, edgePushes);
+  const Scalar shift = Scalar(0.1) + skin;
+  const std::vector<Vec3>& now = staged.state.position;
+  EXPECT_LE((now[0] - staged.substepStart[0]).norm(), shift * (1 + 1e-5f));
+  EXPECT_LE((now[tip] - end).norm(), shift * (1 + 1e-5f));
+  EXPECT_GT((now[0] - staged.substepStart[0]).norm(), shift / 2) << "the light corner gives";
+}
+
 TEST(CollisionDetection, FindsExactlyTheCrossingsABruteForceScanFinds) {
   // Two closed balls that touch at the start close on each other by 0.05 each, with every particle
   // jittered, so that hundreds of particles end inside the other ball and its edges cross the
