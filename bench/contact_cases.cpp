@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
       std::fprintf(csv,
                    "scene,variant,frame,between,within,contacts_per_substep,energy_above,"
                    "new_pairs,new_where_none,deepest_new_where_none,new_apart_at_start,"
-                   "deepest_new_apart_at_start,frozen_bodies\n");
+                   "deepest_new_apart_at_start,frozen_bodies,moved_as_one\n");
   }
   try {
     // A mesh file is the scene `softbake run FILE` makes of it.
@@ -222,12 +222,13 @@ int main(int argc, char** argv) {
       highest = std::max(highest, energy);
       if (csv)
         std::fprintf(
-            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g,%zu,%.3g,%zu\n",
+            csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g,%zu,%.3g,%zu,%zu\n",
             std::filesystem::path(argv[1]).stem().string().c_str(), variant.c_str(), frame,
             count.betweenSurfaces, count.withinSurfaces,
             double(simulator.lastFrameStats().contacts) / double(simulator.substeps().substeps),
             energy - start, newPairs, newWhereNone, deepest, newApart, deepestApart,
-            simulator.lastFrameStats().failsafe.frozenBodies);
+            simulator.lastFrameStats().failsafe.frozenBodies,
+            simulator.lastFrameStats().failsafe.bodiesMovedAsOne);
       // Each frame's row as it is made: a long bake cut short by a time limit keeps its frames.
       if (csv) std::fflush(csv);
     }

@@ -94,7 +94,8 @@ struct StepRecord {
   std::uint64_t solverPhases = 0;      ///< and the phases of its parallel regions
   std::uint64_t failsafePasses = 0;    ///< the failsafe's detection passes, all steps
   std::uint64_t frozenSubsteps = 0;    ///< substeps that reached the failsafe's last resort
-  std::uint64_t frozenBodies = 0;      ///< and the bodies it put back at their substep's start
+  std::uint64_t frozenBodies = 0;      ///< and the bodies it put back at their start, at rest
+  std::uint64_t bodiesMovedAsOne = 0;  ///< and the bodies it moved as one from their start
   /// The largest |V/V_rest − 1| of any closed body at the end of any frame: how round the bodies
   /// stayed, the measure peers are compared at.
   double maxVolumeError = 0;
@@ -158,6 +159,7 @@ StepRecord runMeasuredSteps(Simulator& simulator, int lastFrame,
       record.failsafePasses += after.passes - before.passes;
       record.frozenSubsteps += after.frozen - before.frozen;
       record.frozenBodies += after.frozenBodies - before.frozenBodies;
+      record.bodiesMovedAsOne += after.bodiesMovedAsOne - before.bodiesMovedAsOne;
     }
     record.framesSimulated += double(substep) / substeps;
     if (substep < substeps) break;  // the step limit ended the run inside this frame
@@ -232,11 +234,12 @@ double printContactsAndExports(const StepRecord& record, const std::vector<Expor
   std::printf("  contacts per step: mean %.1f, max %u; broad-phase pairs per step: mean %.1f\n",
               contactsPerStep, contactMax, pairSum / double(steps));
   std::printf(
-      "  failsafe passes per step: mean %.1f; substeps whose last resort put bodies back at "
-      "their start: %llu (%llu bodies)\n",
+      "  failsafe passes per step: mean %.1f; substeps that reached its last resort: %llu "
+      "(bodies put back at rest: %llu; moved as one: %llu)\n",
       double(record.failsafePasses) / double(steps),
       static_cast<unsigned long long>(record.frozenSubsteps),
-      static_cast<unsigned long long>(record.frozenBodies));
+      static_cast<unsigned long long>(record.frozenBodies),
+      static_cast<unsigned long long>(record.bodiesMovedAsOne));
   for (const ExportTiming& e : exports) {
     const double perFrame = e.frames > 0 ? e.seconds / e.frames : 0;
     std::printf("  export %-4s %8.2f ms per frame over %d frames", e.sink->name(), perFrame * 1e3,
@@ -338,7 +341,7 @@ int bench(const BenchOptions& options) {
         "solver_phases_per_step=%.1f "
         "max_volume_error=%.4f set_aside_start=%zu set_aside_end=%zu fitted_start=%zu "
         "fitted_end=%zu "
-        "failsafe_passes_per_step=%.1f frozen_substeps=%llu frozen_bodies=%llu\n",
+        "failsafe_passes_per_step=%.1f frozen_substeps=%llu frozen_bodies=%llu moved_as_one=%llu\n",
         scene.setup.name.c_str(), faces, broadPhase.c_str(), int(settings.collisions.pairCache),
         threads, options.warmupSteps, steps, stepsPerSecond,
         record.framesSimulated / record.simulationSeconds, step.median, step.p95, contactsPerStep,
@@ -350,7 +353,8 @@ int bench(const BenchOptions& options) {
         simulator.initialOverlaps().close.size(), simulator.fittedPairs().size(),
         double(record.failsafePasses) / double(steps),
         static_cast<unsigned long long>(record.frozenSubsteps),
-        static_cast<unsigned long long>(record.frozenBodies));
+        static_cast<unsigned long long>(record.frozenBodies),
+        static_cast<unsigned long long>(record.bodiesMovedAsOne));
     std::fflush(stdout);
     if (options.csv) appendCsvRows(csv, broadPhase, record);
   }

@@ -130,8 +130,13 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   moved_.assign(geometry.particleCount, 0);
   onPlane_.assign(geometry.particleCount, 0);
   inZone_.assign(geometry.particleCount, 0);
-  bodyBack_.assign(topology.bodies.size(), 0);
-  assemblyBack_.assign(topology.bodies.size(), 0);
+  bodyBack_.assign(topology.bodies.size(), kBodyFree);
+  groupMeets_.assign(topology.bodies.size(), 0);
+  groupRests_.assign(topology.bodies.size(), 0);
+  groupNew_.assign(topology.bodies.size(), 0);
+  groupMass_.assign(topology.bodies.size(), 0);
+  groupShift_.assign(topology.bodies.size(), Vec3d::Zero());
+  groupMomentum_.assign(topology.bodies.size(), Vec3d::Zero());
   bodyRoot_.resize(topology.bodies.size());
   zoneParent_.resize(geometry.particleCount);
   std::iota(zoneParent_.begin(), zoneParent_.end(), Index(0));
@@ -170,9 +175,10 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
   std::fill(moved_.begin(), moved_.end(), 0);
   std::fill(onPlane_.begin(), onPlane_.end(), 0);
   const int passes = passes_.impulses + passes_.zones;
-  // Each pass of stage 3 puts at least one more body back (one at its start meets nothing also at
-  // its start), so it ends within the body count; the global return past it is never expected.
-  const int lastResort = passes + int(topology.bodies.size());
+  // Each pass of stage 3 moves at least one more body as one or puts one to rest (one at its start
+  // meets nothing also at its start), so it ends within twice the body count; the global return
+  // past it is never expected.
+  const int lastResort = passes + 2 * int(topology.bodies.size());
   for (int pass = 0; pass <= lastResort; ++pass) {
     ++stats.passes;
     const bool found = findImpacts(topology, geometry, detector, start, state.position, pass > 0);
@@ -189,13 +195,14 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
       stats.frozen += pass == passes;
       stats.frozenBodies += topology.bodies.size();
     } else if (pass >= passes) {
-      // Stage 3: the bodies of what still meets go back to where they started, at rest. The
-      // whole scene put back in one go stopped every body dead for a meeting of two.
+      // Stage 3: the bodies of what still meets go back to where they started, and move from
+      // there as one (putBodiesBack). The whole scene put back at rest in one go stopped every
+      // body dead for a meeting of two, and an assembly put back at rest stopped in mid-air.
       if (pass == passes) {
         ++stats.frozen;
         joinFittedBodies(topology, geometry, detector);
       }
-      stats.frozenBodies += putBodiesBack(topology, geometry, start, state);
+      putBodiesBack(topology, geometry, start, state, stats);
     } else if (pass < passes_.impulses) {
       applyImpulses(topology, geometry, state);
       // Measured again next pass, with the meetings the impulses moved.
@@ -210,7 +217,8 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
       // Those zones go to the passes that leave a zone where it started.
       const int firstStaying = passes_.impulses + passes_.translatingZones;
       if (pass < firstStaying && pass > passes_.impulses && sameMeetings()) pass = firstStaying;
-      stats.zoneParticles = moveZones(topology, geometry, start, state, pass >= firstStaying);
+      stats.zoneParticles =
+          moveZones(topology, geometry, start, state, pass >= firstStaying ? dt : 0.0);
       lastMeetings_.clear();
       for (const FailsafeImpact& impact : impacts_) lastMeetings_.push_back(impact.vertex);
       lastCrossings_ = crossings_;
@@ -218,7 +226,7 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
     keepAbovePlanes(topology, state, dt);
   }
   clearZones();
-  if (stats.frozen) std::fill(bodyBack_.begin(), bodyBack_.end(), 0);
+  if (stats.frozen) std::fill(bodyBack_.begin(), bodyBack_.end(), kBodyFree);
   return stats;
 }
 
@@ -569,7 +577,8 @@ void CollisionFailsafe::forEachMeeting(const CollisionGeometry& geometry, Visit&
 std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
                                          const CollisionGeometry& geometry,
                                          std::span<const Vec3> start, SimulationState& state,
-                                         bool stayAtStart) {
+                                         double stayFor) {
+  const bool stayAtStart = stayFor > 0;
   const Index particles = geometry.particleCount;
   const auto join = [&](Index v) {
     if (!inZone_[v]) {
@@ -617,9 +626,17 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
   for (Index v : zoneMembers_) {
     const Index root = zoneOf(v);
     moved_[v] = 1;
-    if (stayAtStart || zoneFixed_[root] || zoneMass_[root] <= 0) {
+    if (zoneFixed_[root] || zoneMass_[root] <= 0) {
       state.position[v] = start[v];
       state.velocity[v].setZero();
+    } else if (stayAtStart) {
+      // Where it started, with the momentum it had there: its momentum now less the substep's
+      // gravity, since what acts within a zone adds none. Left at rest, a falling assembly's
+      // zones stopped it in mid-air; with the gravity kept, each such substep gained energy.
+      state.position[v] = start[v];
+      state.velocity[v] = (zoneVelocity_[root] / zoneMass_[root] -
+                           stayFor * topology.settings.gravity.cast<double>())
+                              .cast<Scalar>();
     } else {
       state.position[v] = start[v] + (zoneShift_[root] / zoneMass_[root]).cast<Scalar>();
       state.velocity[v] = (zoneVelocity_[root] / zoneMass_[root]).cast<Scalar>();
@@ -645,28 +662,77 @@ void CollisionFailsafe::joinFittedBodies(const SceneTopology& topology,
   }
 }
 
-std::size_t CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
-                                             const CollisionGeometry& geometry,
-                                             std::span<const Vec3> start, SimulationState& state) {
+void CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
+                                      const CollisionGeometry& geometry,
+                                      std::span<const Vec3> start, SimulationState& state,
+                                      FailsafeStats& stats) {
   const Index particles = geometry.particleCount;
+  const auto groupOf = [&](Index body) { return findRoot(bodyRoot_, body); };
+  // The bodies of one meeting go together: moved as one, they cannot meet each other.
   forEachMeeting(geometry, [&](std::span<const Index> vertices) {
-    for (Index v : vertices)
-      if (v < particles) assemblyBack_[findRoot(bodyRoot_, topology.particleBody[v])] = 1;
+    Index group = ~Index(0);
+    for (Index v : vertices) {
+      if (v >= particles) continue;
+      const Index g = groupOf(topology.particleBody[v]);
+      group = group == ~Index(0) ? g : joinRoots(bodyRoot_, group, g);
+    }
   });
-  std::size_t count = 0;
+  forEachMeeting(geometry, [&](std::span<const Index> vertices) {
+    Index group = ~Index(0);
+    bool fixed = false;
+    for (Index v : vertices) {
+      if (v >= particles)
+        fixed = true;
+      else
+        group = groupOf(topology.particleBody[v]);
+    }
+    if (group == ~Index(0)) return;
+    groupMeets_[group] = 1;
+    if (fixed) groupRests_[group] = 1;  // against a static mesh: moving it as one cannot help
+  });
+  // A group goes back at rest where it met what cannot move (a static mesh, a pin, a plane), where
+  // it holds a body already back at rest, and where it met again with no body new to it. Every
+  // other group moves as one from its start, with its mean displacement and velocity: a rigid
+  // impact zone of whole bodies (Bridson et al.'s also turn; these only translate), so an
+  // assembly that meets itself in free fall keeps falling. Each pass so puts a body into a
+  // moving group or to rest, and the stage ends within twice the body count.
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
-    if (bodyBack_[b] || !assemblyBack_[findRoot(bodyRoot_, Index(b))]) continue;
-    bodyBack_[b] = 1;
-    ++count;
+    const Index g = groupOf(Index(b));
+    if (!groupMeets_[g]) continue;
+    if (bodyBack_[b] == kBodyAtRest) groupRests_[g] = 1;
+    if (bodyBack_[b] == kBodyFree) groupNew_[g] = 1;
     const Body& body = topology.bodies[b];
     for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
-      state.position[p] = start[p];
-      state.velocity[p].setZero();
+      if (topology.inverseMass[p] == 0 || onPlane_[p]) groupRests_[g] = 1;
+      const double m = topology.mass[p];
+      groupMass_[g] += m;
+      groupShift_[g] += m * (state.position[p] - start[p]).cast<double>();
+      groupMomentum_[g] += m * state.velocity[p].cast<double>();
+    }
+  }
+  for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
+    const Index g = groupOf(Index(b));
+    if (!groupMeets_[g]) continue;
+    const bool rest = groupRests_[g] || !groupNew_[g] || !(groupMass_[g] > 0);
+    const Vec3 shift = rest ? Vec3::Zero() : Vec3((groupShift_[g] / groupMass_[g]).cast<Scalar>());
+    const Vec3 velocity =
+        rest ? Vec3::Zero() : Vec3((groupMomentum_[g] / groupMass_[g]).cast<Scalar>());
+    if (rest && bodyBack_[b] != kBodyAtRest) ++stats.frozenBodies;
+    if (!rest && bodyBack_[b] == kBodyFree) ++stats.bodiesMovedAsOne;
+    bodyBack_[b] = rest ? kBodyAtRest : kBodyMovedAsOne;
+    const Body& body = topology.bodies[b];
+    for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
+      state.position[p] = start[p] + shift;
+      state.velocity[p] = velocity;
       moved_[p] = 1;
     }
   }
-  std::fill(assemblyBack_.begin(), assemblyBack_.end(), 0);
-  return count;
+  for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
+    groupMeets_[b] = groupRests_[b] = groupNew_[b] = 0;
+    groupMass_[b] = 0;
+    groupShift_[b].setZero();
+    groupMomentum_[b].setZero();
+  }
 }
 
 bool CollisionFailsafe::sameMeetings() const {

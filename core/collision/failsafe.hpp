@@ -101,14 +101,16 @@ struct FailsafeStats {
   std::size_t impacts = 0;        ///< meetings found over all passes
   std::size_t zoneParticles = 0;  ///< particles moved as part of an impact zone
   std::size_t frozen = 0;         ///< substeps that reached stage 3
-  std::size_t frozenBodies = 0;   ///< bodies stage 3 put back where their substep started
-  std::size_t passes = 0;         ///< detection passes run
+  std::size_t frozenBodies = 0;   ///< bodies stage 3 put back where their substep started, at rest
+  std::size_t bodiesMovedAsOne = 0;  ///< bodies stage 3 moved as one group from their start
+  std::size_t passes = 0;            ///< detection passes run
 
   FailsafeStats& operator+=(const FailsafeStats& other) {
     impacts += other.impacts;
     zoneParticles += other.zoneParticles;
     frozen += other.frozen;
     frozenBodies += other.frozenBodies;
+    bodiesMovedAsOne += other.bodiesMovedAsOne;
     passes += other.passes;
     return *this;
   }
@@ -130,7 +132,7 @@ struct FailsafeImpact {
 /// zone grows by its neighbours one pass at a time, and an assembly of fitted parts is a long
 /// chain of them (an engine of 115 parts needed more than 8 passes, and zones left at their start
 /// took their velocity with them: 66 N s in one frame, and the falling engine hung in the air).
-/// The last few passes leave a zone where it started, which always frees it.
+/// The last few passes leave a zone where it started (with its momentum there), which frees it.
 struct FailsafePasses {
   int impulses = 4;
   int translatingZones = 60;
@@ -200,19 +202,21 @@ class CollisionFailsafe {
   /// substep that reaches stage 3, as the fitted pairs change only between frames.
   void joinFittedBodies(const SceneTopology& topology, const CollisionGeometry& geometry,
                         const CollisionDetector& detector);
-  /// Stage 3: every particle of each assembly (joinFittedBodies()) that holds a body of the latest
-  /// meetings, back where the substep started, at rest; returns how many bodies it put back that
-  /// were not back already.
-  std::size_t putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
-                            std::span<const Vec3> start, SimulationState& state);
+  /// Stage 3: the bodies of the latest meetings, each with every body that a meeting or a fit
+  /// (joinFittedBodies()) joins to it, go back where the substep started; each such group moves
+  /// from there as one, with its mean displacement and velocity, or stays there at rest where
+  /// that cannot part it. Counts the bodies in `stats`.
+  void putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
+                     std::span<const Vec3> start, SimulationState& state, FailsafeStats& stats);
   /// Calls `visit` with the vertices of each of the latest meetings: a meeting's four, a
   /// crossing's six corners.
   template <class Visit>
   void forEachMeeting(const CollisionGeometry& geometry, Visit&& visit) const;
   /// Merges the meetings' particles into zones and moves each zone as one; returns the particles
-  /// in zones.
+  /// in zones. With `stayFor` (the substep, s) above 0, each zone stays where it started instead,
+  /// with the momentum it had there.
   std::size_t moveZones(const SceneTopology& topology, const CollisionGeometry& geometry,
-                        std::span<const Vec3> start, SimulationState& state, bool stayAtStart);
+                        std::span<const Vec3> start, SimulationState& state, double stayFor);
   Index zoneOf(Index v);
   void clearZones();
   /// Whether impacts_ and crossings_ hold the meetings of the latest translating zone pass.
@@ -250,9 +254,15 @@ class CollisionFailsafe {
   std::vector<Index> zoneParent_;   ///< union–find over particles; zoneParent_[v] == v: a root
   std::vector<Index> zoneMembers_;  ///< scratch: particles of zones, grouped by root
   std::vector<std::uint8_t> inZone_;
-  std::vector<std::uint8_t> bodyBack_;      ///< per body: put back by this substep's stage 3
-  std::vector<std::uint8_t> assemblyBack_;  ///< scratch, per assembly root: a pass puts it back
-  std::vector<Index> bodyRoot_;  ///< scratch: union–find over bodies by their fitted pairs
+  enum BodyBack : std::uint8_t { kBodyFree, kBodyMovedAsOne, kBodyAtRest };
+  std::vector<std::uint8_t> bodyBack_;  ///< per body: what this substep's stage 3 did with it
+  /// Scratch: union–find over bodies by their fitted pairs and their meetings in stage 3.
+  std::vector<Index> bodyRoot_;
+  /// Scratch, per group root of bodyRoot_: a meeting of this pass holds it, it must rest, it holds
+  /// a body stage 3 had not moved, and its mass, Σ m·displacement and Σ m·velocity.
+  std::vector<std::uint8_t> groupMeets_, groupRests_, groupNew_;
+  std::vector<double> groupMass_;
+  std::vector<Vec3d> groupShift_, groupMomentum_;
   std::vector<std::uint8_t>
       zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
   std::vector<double> zoneMass_;  ///< per zone root, and its momentum over the substep:
