@@ -135,7 +135,10 @@ TEST(CollisionResponse, Case2PutsTheParticleOnTheCornerLineAndUsesTheAverageNorm
 /// path while the others stay. Shifted by the sheet's centroid, the particle's segment stays on
 /// one side of the sheet and the segment test misses it; it did change sides of the sheet, so the
 /// open-surface rule finds it, from the side it came from, and the response puts it back there.
-TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCameFrom) {
+/// A one-triangle open sheet on z = 0 (corners (0,0), (1,0), (0,1)) and a one-triangle dart whose
+/// corner 0, `tip`, is free and corners 1 and 2 are pinned; no gravity. The sheet's three particles
+/// come first, so the tip is particle 3.
+SceneSetup sheetAndDart(const Vec3f& tip, const Vec3f& pinned1, const Vec3f& pinned2) {
   SceneSetup scene;
   scene.settings.gravity.setZero();
   BodySetup sheet;
@@ -145,11 +148,16 @@ TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCam
   scene.bodies.push_back(sheet);
   BodySetup dart;
   dart.name = "dart";
-  dart.mesh.positions = {Vec3f(0.25f, 0.25f, 0.1f), Vec3f(0.9f, 0.9f, 0.4f),
-                         Vec3f(0.9f, 0.8f, 0.5f)};
+  dart.mesh.positions = {tip, pinned1, pinned2};
   dart.mesh.triangles = {{0, 1, 2}};
   dart.pins.particles = {1, 2};
   scene.bodies.push_back(dart);
+  return scene;
+}
+
+TEST(CollisionResponse, AParticleThatPassesABendingSheetIsCaughtFromTheSideItCameFrom) {
+  const SceneSetup scene =
+      sheetAndDart(Vec3f(0.25f, 0.25f, 0.1f), Vec3f(0.9f, 0.9f, 0.4f), Vec3f(0.9f, 0.8f, 0.5f));
   test::StagedScene staged(buildSceneTopology(scene));
   const Index tip = 3;  // the dart's free corner: the sheet's three particles come first
   ASSERT_TRUE(staged.collision.surfaces.size() == 2 && !staged.collision.surfaceClosed[0]);
@@ -228,21 +236,9 @@ TEST(CollisionResponse, AFarCrossingMovesTheParticleItsLongestEdgeAndOutOfTheSur
 /// A light corner struck near it, beside pinned ones, took 1/w of the correction: w = 0.2 moved
 /// it five times the shift. No vertex moves further than the correction itself.
 TEST(CollisionResponse, NoVertexMovesFurtherThanTheCorrection) {
-  SceneSetup scene;
-  scene.settings.gravity.setZero();
-  BodySetup sheet;
-  sheet.name = "sheet";
-  sheet.mesh.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
-  sheet.mesh.triangles = {{0, 1, 2}};
-  sheet.pins.particles = {1, 2};
-  sheet.mass = Scalar(0.001);
-  scene.bodies.push_back(sheet);
-  BodySetup dart;
-  dart.name = "dart";
-  dart.mesh.positions = {Vec3f(0.6f, 0.2f, 0.1f), Vec3f(2, 2, 0.4f), Vec3f(2, 1.8f, 0.5f)};
-  dart.mesh.triangles = {{0, 1, 2}};
-  dart.pins.particles = {1, 2};
-  scene.bodies.push_back(dart);
+  SceneSetup scene = sheetAndDart(Vec3f(0.6f, 0.2f, 0.1f), Vec3f(2, 2, 0.4f), Vec3f(2, 1.8f, 0.5f));
+  scene.bodies[0].pins.particles = {1, 2};
+  scene.bodies[0].mass = Scalar(0.001);
   test::StagedScene staged(buildSceneTopology(scene));
   const Index tip = 3;  // the sheet's three particles come first
   const Scalar skin = staged.topology.settings.skin;
