@@ -58,7 +58,7 @@ CollisionGeometry buildCollisionGeometry(const SceneTopology& topology) {
                                     topology.bodies[b].triangleCount, Index(b));
   for (std::size_t s = 0; s < topology.staticShapes.size(); ++s)
     addStaticMesh(geometry, topology.staticShapes[s], topology.staticMeshes[s]);
-  geometry.selfPatches = buildSelfPatches(geometry);
+  geometry.selfPatches = buildSelfPatches(geometry, topology.restPosition);
   linkVertexTriangles(geometry);
   return geometry;
 }

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <utility>
 
 #include "core/collision/geometry.hpp"
@@ -17,9 +18,77 @@ namespace {
 constexpr std::size_t kPatchGrain = 8;   ///< patches per chunk of the cone test, at least
 constexpr Index kPatchTriangles = 32;    ///< most triangles of a patch
 constexpr double kFlatConeAngle = 80.0;  ///< degrees from the patch's mean normal
+/// How close two triangles seen along an axis may come, against the longer edge of the two,
+/// before they count as lying over each other: unwelded seams of a CAD part (a cap's rim and its
+/// wall's foot, 1.6 µm apart) touch there and cross at the slightest turn. Two triangles of a
+/// welded disc that share no vertex keep a triangle's height between them, a tenth of an edge at
+/// the cone's steepest.
+constexpr double kNearOfEdge = 1e-2;
+
+using Corners2 = std::array<Eigen::Vector2d, 3>;
+
+/// Whether two triangles, projected into one plane, overlap there or come within kNearOfEdge:
+/// no separating axis (the six edge normals) keeps them further apart. Conservative: corners
+/// that face each other may be further apart than any edge normal tells.
+bool nearInPlane(const Corners2& a, const Corners2& b) {
+  double longest = 0;
+  for (const Corners2* t : {&a, &b})
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, ((*t)[(k + 1) % 3] - (*t)[k]).norm());
+  if (!(longest > 0)) return false;
+  const double margin = kNearOfEdge * longest;
+  for (const Corners2* t : {&a, &b})
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d edge = (*t)[(k + 1) % 3] - (*t)[k];
+      const double length = edge.norm();
+      if (!(length > 0)) continue;
+      const Eigen::Vector2d normal(-edge.y() / length, edge.x() / length);
+      const auto extent = [&](const Corners2& c) {
+        const double d0 = normal.dot(c[0]), d1 = normal.dot(c[1]), d2 = normal.dot(c[2]);
+        return std::pair(std::min({d0, d1, d2}), std::max({d0, d1, d2}));
+      };
+      const auto [aLow, aHigh] = extent(a);
+      const auto [bLow, bHigh] = extent(b);
+      if (bLow - aHigh > margin || aLow - bHigh > margin) return false;
+    }
+  return true;
+}
+
+/// Whether the rest shape of the triangles `first` (with `second`, when given: then only the
+/// pairs across the two) lies over itself along the axis of its rest normals: two triangles that
+/// share no vertex overlap, or nearly, seen along it.
+bool liesOverItself(const CollisionGeometry& geometry, std::span<const Vec3> rest,
+                    std::span<const Index> first, std::span<const Index> second) {
+  const auto corner = [&](Index t, int k) {
+    return rest[geometry.triangleVertices[t][k]].cast<double>();
+  };
+  Vec3d axis = Vec3d::Zero();
+  for (std::span<const Index> part : {first, second})
+    for (Index t : part) axis += (corner(t, 1) - corner(t, 0)).cross(corner(t, 2) - corner(t, 0));
+  if (!(axis.squaredNorm() > 0)) return true;
+  axis.normalize();
+  const Vec3d u = axis.unitOrthogonal(), v = axis.cross(u);
+  const auto seen = [&](Index t) {
+    Corners2 c;
+    for (int k = 0; k < 3; ++k) c[k] = {u.dot(corner(t, k)), v.dot(corner(t, k))};
+    return c;
+  };
+  const auto shareVertex = [&](Index a, Index b) {
+    for (Index x : geometry.triangleVertices[a])
+      for (Index y : geometry.triangleVertices[b])
+        if (x == y) return true;
+    return false;
+  };
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    const Corners2 a = seen(first[i]);
+    const std::span<const Index> others = second.empty() ? first.subspan(i + 1) : second;
+    for (Index other : others)
+      if (!shareVertex(first[i], other) && nearInPlane(a, seen(other))) return true;
+  }
+  return false;
+}
 }  // namespace
 
-SelfPatches buildSelfPatches(const CollisionGeometry& geometry) {
+SelfPatches buildSelfPatches(const CollisionGeometry& geometry, std::span<const Vec3> rest) {
   SelfPatches patches;
   patches.trianglePatch.assign(geometry.triangleVertices.size(), kNoPatch);
   patches.patchStart.push_back(0);
@@ -94,6 +163,31 @@ SelfPatches buildSelfPatches(const CollisionGeometry& geometry) {
   }
   for (std::size_t p = 0; p < patches.patchCount(); ++p)
     patches.neighbourStart[p + 1] += patches.neighbourStart[p];
+  // Each pair of neighbours from its lower patch, written to both entries: one verdict for both.
+  patches.overlapsAtRest.assign(patches.patchCount(), 0);
+  patches.overlapsAtRestWith.assign(patches.neighbours.size(), 0);
+  const auto trianglesOf = [&](Index p) {
+    return std::span<const Index>(patches.triangles)
+        .subspan(patches.patchStart[p], patches.patchStart[p + 1] - patches.patchStart[p]);
+  };
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, patches.patchCount(), kPatchGrain),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t p = range.begin(); p != range.end(); ++p) {
+          patches.overlapsAtRest[p] = liesOverItself(geometry, rest, trianglesOf(Index(p)), {});
+          for (Index k = patches.neighbourStart[p]; k < patches.neighbourStart[p + 1]; ++k) {
+            const Index q = patches.neighbours[k];
+            if (q < p) continue;
+            const std::uint8_t over =
+                liesOverItself(geometry, rest, trianglesOf(Index(p)), trianglesOf(q));
+            patches.overlapsAtRestWith[k] = over;
+            const auto from = patches.neighbours.begin() + patches.neighbourStart[q];
+            const auto to = patches.neighbours.begin() + patches.neighbourStart[q + 1];
+            patches.overlapsAtRestWith[std::lower_bound(from, to, Index(p)) -
+                                       patches.neighbours.begin()] = over;
+          }
+        }
+      });
   return patches;
 }
 
@@ -135,7 +229,7 @@ void updateFlatPatches(const CollisionGeometry& geometry, std::span<const Vec3> 
             widest = std::min(widest, double(along) / std::sqrt(double(normals[k].squaredNorm()) *
                                                                 double(axisSquared)));
           }
-          out.flat[p] = std::uint8_t(inCone);
+          out.flat[p] = std::uint8_t(inCone && !patches.overlapsAtRest[p]);
           out.axis[p] = inCone ? Vec3d(axis.cast<double>().normalized()) : Vec3d::Zero();
           out.halfAngle[p] = inCone ? std::acos(std::clamp(widest, -1.0, 1.0)) : std::numbers::pi;
         }
@@ -156,7 +250,7 @@ void updateFlatPatches(const CollisionGeometry& geometry, std::span<const Vec3> 
             const double narrow = std::min(out.halfAngle[p], out.halfAngle[q]);
             const double wide = std::max(out.halfAngle[p], out.halfAngle[q]);
             const double merged = apart + narrow <= wide ? wide : (apart + narrow + wide) / 2;
-            out.flatWith[k] = std::uint8_t(merged < limit);
+            out.flatWith[k] = std::uint8_t(merged < limit && !patches.overlapsAtRestWith[k]);
           }
       });
 }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
@@ -69,7 +70,7 @@ struct Sheet {
                                       geometry.surfaces[s].triangleCount, Index(s));
     geometry.particleCount = Index(rest.size());
     geometry.softTriangleCount = Index(t.size());
-    geometry.selfPatches = buildSelfPatches(geometry);
+    geometry.selfPatches = buildSelfPatches(geometry, rest);
   }
 
   /// The sheet crumpled by a smooth random field of amplitude `amplitude` (m) on every axis:
@@ -118,7 +119,7 @@ struct Ball {
     geometry.surfaces.push_back({0, Index(mesh.triangles.size()), true, true});
     geometry.particleCount = Index(positions.size());
     geometry.softTriangleCount = Index(mesh.triangles.size());
-    geometry.selfPatches = buildSelfPatches(geometry);
+    geometry.selfPatches = buildSelfPatches(geometry, positions);
   }
 };
 
@@ -308,6 +309,99 @@ TEST(SelfPatches, NeighboursAreThePatchesThatShareAVertexAndAgreeWhetherTheyAreF
   EXPECT_GT(pairs, patches.patchCount());
   EXPECT_TRUE(std::is_sorted(patches.neighbours.begin() + patches.neighbourStart[0],
                              patches.neighbours.begin() + patches.neighbourStart[1]));
+}
+
+/// The foot of a CAD part's cylinder, as the two-cylinder engine models it: a cap facing down (a
+/// fan of 4 triangles around its centre, 40 mm across) and the wall above its rim (8 triangles,
+/// 20 mm high, facing out), welded at one vertex only. Every other foot vertex of the wall stands
+/// 2 µm outside the cap's rim: an unwelded seam. The cap and the wall are two patches, neighbours
+/// at the welded vertex, whose cones merge within 60°.
+struct CapAndWall {
+  std::vector<Vec3> rest;
+  CollisionGeometry geometry;
+  static constexpr Scalar kRadius = 0.04f, kHeight = 0.02f, kSeam = 2e-6f;
+
+  CapAndWall() {
+    const auto around = [](Scalar radius, int k, Scalar y) {
+      const Scalar angle = Scalar(k) * Scalar(std::numbers::pi / 12);  // 15° apart
+      return Vec3(radius * std::cos(angle), y, radius * std::sin(angle));
+    };
+    rest.push_back(Vec3::Zero());                                        // 0: the cap's centre
+    for (int k = 0; k <= 4; ++k) rest.push_back(around(kRadius, k, 0));  // 1–5: its rim
+    std::vector<Triangle>& t = geometry.triangleVertices;
+    for (Index k = 1; k <= 4; ++k) t.push_back({0, k, k + 1});  // normals −y
+    // The wall's foot (6–9, after the welded 1) and top (10–14).
+    for (int k = 1; k <= 4; ++k) rest.push_back(around(kRadius + kSeam, k, 0));
+    for (int k = 0; k <= 4; ++k) rest.push_back(around(kRadius, k, kHeight));
+    const auto foot = [](Index k) { return k == 0 ? Index(1) : Index(5 + k); };
+    for (Index k = 0; k < 4; ++k) {  // normals outward
+      t.push_back({foot(k), 10 + k, foot(k + 1)});
+      t.push_back({foot(k + 1), 10 + k, 11 + k});
+    }
+    geometry.surfaces.push_back({0, Index(t.size()), true, true});
+    geometry.triangleSurface.assign(t.size(), 0);
+    geometry.particleCount = Index(rest.size());
+    geometry.softTriangleCount = Index(t.size());
+    geometry.selfPatches = buildSelfPatches(geometry, rest);
+  }
+};
+
+TEST(SelfPatches, ACapAndAWallWhoseUnweldedSeamTouchesAreNeverFlatAsOne) {
+  const CapAndWall part;
+  const SelfPatches& patches = part.geometry.selfPatches;
+  ASSERT_EQ(patches.patchCount(), 2u);
+  ASSERT_EQ(patches.neighbourStart[1] - patches.neighbourStart[0], 1u);
+  // One foot vertex of the wall, 50 µm in and 10 µm down: its wall triangles go through the cap,
+  // while every normal stays where it was within a few degrees.
+  std::vector<Vec3> end = part.rest;
+  end[7] = Vec3(end[7].x(), -1e-5f, end[7].z()) * (1 - 5e-5f / CapAndWall::kRadius);
+  const test::IntersectionCount crossing = test::countIntersectingPairs(part.geometry, end);
+  ASSERT_GT(crossing.withinSurfaces, 0u);
+  PatchFlatness flatness;
+  updateFlatPatches(part.geometry, part.rest, end, flatness);
+  // Each alone is a height field; as one they are not, though their cones would pass.
+  EXPECT_TRUE(flatness.flat[0] && flatness.flat[1]);
+  EXPECT_EQ(flatness.flatWith[0], 0);
+  EXPECT_EQ(flatness.flatWith[1], 0);
+  std::vector<Box3> boxes;
+  for (const Triangle& t : part.geometry.triangleVertices) {
+    Box3 box;
+    for (Index v : t) box.extend(part.rest[v]).extend(end[v]);
+    boxes.push_back(Box3(box.min().array() - 0.001f, box.max().array() + 0.001f));
+  }
+  const BroadPhaseInput input = part.geometry.broadPhaseInput(boxes, &flatness);
+  const std::vector<TrianglePair> eligible = definitionPairs(input);
+  for (const auto& [a, b] : crossing.pairs)
+    EXPECT_TRUE(std::binary_search(eligible.begin(), eligible.end(), TrianglePair{a, b}))
+        << "triangles " << a << " and " << b << " cross, and no broad phase would list them";
+}
+
+TEST(SelfPatches, ARampWoundPastOneTurnIsNeverFlat) {
+  // A spiral ramp of 30 triangles, 1¼ turns 1 mm apart: its normals tilt by 0.6° at most, a
+  // height field by its cone, but seen from above it lies over itself.
+  std::vector<Vec3> rest;
+  CollisionGeometry geometry;
+  for (int k = 0; k <= 15; ++k) {
+    const double angle = 2.5 * std::numbers::pi * k / 15, y = 1e-3 * angle / (2 * std::numbers::pi);
+    for (double radius : {0.05, 0.1})
+      rest.push_back(
+          Vec3(Scalar(radius * std::cos(angle)), Scalar(y), Scalar(-radius * std::sin(angle))));
+  }
+  std::vector<Triangle>& t = geometry.triangleVertices;
+  for (Index k = 0; k < 15; ++k) {
+    t.push_back({2 * k, 2 * k + 1, 2 * k + 2});
+    t.push_back({2 * k + 2, 2 * k + 1, 2 * k + 3});
+  }
+  geometry.surfaces.push_back({0, Index(t.size()), true, true});
+  geometry.triangleSurface.assign(t.size(), 0);
+  geometry.particleCount = Index(rest.size());
+  geometry.softTriangleCount = Index(t.size());
+  geometry.selfPatches = buildSelfPatches(geometry, rest);
+  ASSERT_EQ(geometry.selfPatches.patchCount(), 1u);
+  PatchFlatness flatness;
+  updateFlatPatches(geometry, rest, rest, flatness);
+  EXPECT_LT(flatness.halfAngle[0], 0.02);  // the cone alone would cull its pairs
+  EXPECT_EQ(flatness.flat[0], 0);
 }
 
 TEST(SelfPatches, ARoundBallLeavesNoPairsWithinItself) {
