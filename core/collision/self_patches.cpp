@@ -25,25 +25,26 @@ constexpr double kFlatConeAngle = 80.0;  ///< degrees from the patch's mean norm
 /// the cone's steepest.
 constexpr double kNearOfEdge = 1e-2;
 
-using Corners2 = std::array<Eigen::Vector2d, 3>;
-
-/// Whether two triangles, projected into one plane, overlap there or come within kNearOfEdge:
-/// no separating axis (the six edge normals) keeps them further apart. Conservative: corners
-/// that face each other may be further apart than any edge normal tells.
-bool nearInPlane(const Corners2& a, const Corners2& b) {
+/// A triangle projected into a plane: its corners, its box and its longest edge.
+struct Seen {
+  std::array<Eigen::Vector2d, 3> corner;
+  Eigen::AlignedBox2d box;
   double longest = 0;
-  for (const Corners2* t : {&a, &b})
-    for (int k = 0; k < 3; ++k) longest = std::max(longest, ((*t)[(k + 1) % 3] - (*t)[k]).norm());
-  if (!(longest > 0)) return false;
-  const double margin = kNearOfEdge * longest;
-  for (const Corners2* t : {&a, &b})
+};
+
+/// Whether two triangles, projected into one plane, overlap there or come within `margin`: no
+/// separating axis (the six edge normals) keeps them further apart. Conservative: corners that
+/// face each other may be further apart than any of these tells.
+bool nearInPlane(const Seen& a, const Seen& b, double margin) {
+  for (const Seen* t : {&a, &b})
     for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector2d edge = (*t)[(k + 1) % 3] - (*t)[k];
+      const Eigen::Vector2d edge = t->corner[(k + 1) % 3] - t->corner[k];
       const double length = edge.norm();
       if (!(length > 0)) continue;
       const Eigen::Vector2d normal(-edge.y() / length, edge.x() / length);
-      const auto extent = [&](const Corners2& c) {
-        const double d0 = normal.dot(c[0]), d1 = normal.dot(c[1]), d2 = normal.dot(c[2]);
+      const auto extent = [&](const Seen& seen) {
+        const double d0 = normal.dot(seen.corner[0]), d1 = normal.dot(seen.corner[1]),
+                     d2 = normal.dot(seen.corner[2]);
         return std::pair(std::min({d0, d1, d2}), std::max({d0, d1, d2}));
       };
       const auto [aLow, aHigh] = extent(a);
@@ -67,23 +68,42 @@ bool liesOverItself(const CollisionGeometry& geometry, std::span<const Vec3> res
   if (!(axis.squaredNorm() > 0)) return true;
   axis.normalize();
   const Vec3d u = axis.unitOrthogonal(), v = axis.cross(u);
-  const auto seen = [&](Index t) {
-    Corners2 c;
-    for (int k = 0; k < 3; ++k) c[k] = {u.dot(corner(t, k)), v.dot(corner(t, k))};
-    return c;
+  // Each triangle projected once: a pair of patches is 32 × 32 pairs of them.
+  std::array<Seen, 2 * kPatchTriangles> seen;
+  const std::size_t count = first.size() + second.size();
+  const auto triangle = [&](std::size_t i) {
+    return i < first.size() ? first[i] : second[i - first.size()];
   };
+  for (std::size_t i = 0; i < count; ++i) {
+    Seen& out = seen[i];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d c = corner(triangle(i), k);
+      out.corner[k] = {u.dot(c), v.dot(c)};
+      out.box.extend(out.corner[k]);
+    }
+    for (int k = 0; k < 3; ++k)
+      out.longest = std::max(out.longest, (out.corner[(k + 1) % 3] - out.corner[k]).norm());
+  }
   const auto shareVertex = [&](Index a, Index b) {
     for (Index x : geometry.triangleVertices[a])
       for (Index y : geometry.triangleVertices[b])
         if (x == y) return true;
     return false;
   };
-  for (std::size_t i = 0; i < first.size(); ++i) {
-    const Corners2 a = seen(first[i]);
-    const std::span<const Index> others = second.empty() ? first.subspan(i + 1) : second;
-    for (Index other : others)
-      if (!shareVertex(first[i], other) && nearInPlane(a, seen(other))) return true;
-  }
+  // The boxes first: most pairs of two patches are far apart, and their test is the cheapest.
+  const auto boxesNear = [](const Seen& a, const Seen& b, double margin) {
+    for (int d = 0; d < 2; ++d)
+      if (b.box.min()[d] - a.box.max()[d] > margin || a.box.min()[d] - b.box.max()[d] > margin)
+        return false;
+    return true;
+  };
+  for (std::size_t i = 0; i < first.size(); ++i)
+    for (std::size_t j = second.empty() ? i + 1 : first.size(); j < count; ++j) {
+      const double margin = kNearOfEdge * std::max(seen[i].longest, seen[j].longest);
+      if (margin > 0 && boxesNear(seen[i], seen[j], margin) &&
+          !shareVertex(triangle(i), triangle(j)) && nearInPlane(seen[i], seen[j], margin))
+        return true;
+    }
   return false;
 }
 }  // namespace
