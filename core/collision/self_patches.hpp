@@ -23,9 +23,10 @@
 /// The theorem also asks that the patch, seen along the cone's axis, not lie over itself (its
 /// outline not cross itself). That is checked once, on the rest shape along the rest cone's axis,
 /// for each patch and each pair of neighbours: where two of its triangles that share no vertex
-/// overlap there, it is never a height field, whatever its normals. Two neighbouring discs of a
-/// CAD part do: a wall and a fin whose edge the model placed 1.6 µm in front of it meet at one
-/// vertex, their cones merge within 57°, and a corner of the fin went 112 µm through the wall,
+/// overlap there, or nearly (a hundredth of their longer edge), it is never a height field,
+/// whatever its normals. Two neighbouring discs of a CAD part do: a cylinder's cap and its wall,
+/// welded at one vertex, the wall's other foot vertices 1.6 µm outside the cap's rim (an unwelded
+/// seam), have cones that merge within 57°, and a corner of the wall went 112 µm through the cap,
 /// unseen by the detector and the failsafe alike. A soft body's discs never do. A patch grown as a
 /// disc of 32 triangles would have to spiral around to do it; a shape deformed into overlap from a
 /// rest that did not is not checked.
