@@ -131,10 +131,13 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   onPlane_.assign(geometry.particleCount, 0);
   inZone_.assign(geometry.particleCount, 0);
   bodyBack_.assign(topology.bodies.size(), kBodyFree);
+  bodyGroupSize_.assign(topology.bodies.size(), 0);
+  groupBodies_.assign(topology.bodies.size(), 0);
   groupMeets_.assign(topology.bodies.size(), 0);
   groupRests_.assign(topology.bodies.size(), 0);
   groupNew_.assign(topology.bodies.size(), 0);
   groupMass_.assign(topology.bodies.size(), 0);
+  groupLowest_.assign(topology.bodies.size(), 0);
   groupShift_.assign(topology.bodies.size(), Vec3d::Zero());
   groupMomentum_.assign(topology.bodies.size(), Vec3d::Zero());
   bodyRoot_.resize(topology.bodies.size());
@@ -175,10 +178,10 @@ FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,
   std::fill(moved_.begin(), moved_.end(), 0);
   std::fill(onPlane_.begin(), onPlane_.end(), 0);
   const int passes = passes_.impulses + passes_.zones;
-  // Each pass of stage 3 moves at least one more body as one or puts one to rest (one at its start
-  // meets nothing also at its start), so it ends within twice the body count; the global return
-  // past it is never expected.
-  const int lastResort = passes + 2 * int(topology.bodies.size());
+  // Each pass of stage 3 moves at least one more body as one, joins two groups or puts one to rest
+  // (one at its start meets nothing also at its start), so it ends within three times the body
+  // count; the global return past it is never expected.
+  const int lastResort = passes + 3 * int(topology.bodies.size());
   for (int pass = 0; pass <= lastResort; ++pass) {
     ++stats.passes;
     const bool found = findImpacts(topology, geometry, detector, start, state.position, pass > 0);
@@ -442,7 +445,6 @@ bool CollisionFailsafe::crosses(const CollisionGeometry& geometry, std::span<con
 
 bool CollisionFailsafe::notClosing(const CollisionGeometry& geometry, std::span<const Vec3> start,
                                    std::span<const Vec3> end, const FailsafeImpact& impact) {
-  if (impact.impact.t > 0) return false;
   const auto gap = [&](std::span<const Vec3> at) {
     double sum = 0;
     for (int k = 0; k < 4; ++k)
@@ -454,7 +456,9 @@ bool CollisionFailsafe::notClosing(const CollisionGeometry& geometry, std::span<
   // (stage 2) keeps its primitives where they were relative to each other only to float
   // precision, and taking that for closing met the zone with itself in every pass, until it was
   // left at the substep's start without its velocity: a falling assembly of fitted parts lost
-  // momentum at every such substep and hung in the air.
+  // momentum at every such substep and hung in the air. So does a group of bodies moved as one
+  // (stage 3), where the rounding takes two primitives a hair past their tolerance within the
+  // substep: one such meeting put assimp's engine, moved as one, back at rest above the ground.
   const double before = gap(start), after = gap(end);
   return (before > 0) == (after > 0) &&
          std::abs(after) >= std::abs(before) - kRoundingOfSeparation * impact.separation;
@@ -690,20 +694,23 @@ void CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
     groupMeets_[group] = 1;
     if (fixed) groupRests_[group] = 1;  // against a static mesh: moving it as one cannot help
   });
-  // A group goes back at rest where it met what cannot move (a static mesh, a pin, a plane), where
-  // it holds a body already back at rest, and where it met again with no body new to it. Every
-  // other group moves as one from its start, with its mean displacement and velocity: a rigid
-  // impact zone of whole bodies (Bridson et al.'s also turn; these only translate), so an
-  // assembly that meets itself in free fall keeps falling. Each pass so puts a body into a
-  // moving group or to rest, and the stage ends within twice the body count.
+  // A group goes back at rest where it met what cannot move (a static mesh, a pin), where it holds
+  // a body already back at rest, and where it met again as it was: no body new to it, and no two
+  // groups that moved apart joined in it. Every other group moves as one from its start, with its
+  // mean displacement and velocity: a rigid impact zone of whole bodies (Bridson et al.'s also
+  // turn; these only translate), so an assembly that meets itself in free fall keeps falling.
+  // Two groups that each moved as one and then met move on as one: at rest, assimp's engine
+  // (its assembly slowed by the ground, a part of it still falling) stopped dead above the
+  // ground. Each pass so moves a body, joins two groups or puts one to rest, and the stage ends
+  // within three times the body count.
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
     const Index g = groupOf(Index(b));
     if (!groupMeets_[g]) continue;
     if (bodyBack_[b] == kBodyAtRest) groupRests_[g] = 1;
-    if (bodyBack_[b] == kBodyFree) groupNew_[g] = 1;
+    ++groupBodies_[g];
     const Body& body = topology.bodies[b];
     for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
-      if (topology.inverseMass[p] == 0 || onPlane_[p]) groupRests_[g] = 1;
+      if (topology.inverseMass[p] == 0) groupRests_[g] = 1;
       const double m = topology.mass[p];
       groupMass_[g] += m;
       groupShift_[g] += m * (state.position[p] - start[p]).cast<double>();
@@ -712,14 +719,49 @@ void CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
   }
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
     const Index g = groupOf(Index(b));
+    if (groupMeets_[g] && (bodyBack_[b] == kBodyFree || bodyGroupSize_[b] < groupBodies_[g]))
+      groupNew_[g] = 1;
+  }
+  const auto rests = [&](Index g) {
+    return groupRests_[g] || !groupNew_[g] || !(groupMass_[g] > 0);
+  };
+  for (std::size_t g = 0; g < bodyBack_.size(); ++g)
+    if (groupMeets_[g] && !rests(Index(g))) {
+      groupShift_[g] /= groupMass_[g];
+      groupMomentum_[g] /= groupMass_[g];
+    }
+  // A group that reaches a plane lands on it as one: lifted along the plane's normal until none of
+  // it is below the plane, as keepAbovePlanes() lifts a particle, and without its speed into the
+  // plane. Put back at rest where its substep started, as against what cannot move, an assembly
+  // that reached the ground within the substep stopped above it, and fell again.
+  for (const PlaneCollider& plane : topology.planes) {
+    const Vec3d normal = plane.normal.cast<double>();
+    const double offset = normal.dot(plane.point.cast<double>());
+    std::fill(groupLowest_.begin(), groupLowest_.end(), 0.0);
+    for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
+      const Index g = groupOf(Index(b));
+      if (!groupMeets_[g] || rests(g)) continue;
+      const Body& body = topology.bodies[b];
+      for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p)
+        groupLowest_[g] = std::min(groupLowest_[g],
+                                   normal.dot(start[p].cast<double>() + groupShift_[g]) - offset);
+    }
+    for (std::size_t g = 0; g < bodyBack_.size(); ++g) {
+      if (!(groupLowest_[g] < 0)) continue;
+      groupShift_[g] += (separation_ - groupLowest_[g]) * normal;
+      groupMomentum_[g] -= std::min(0.0, normal.dot(groupMomentum_[g])) * normal;
+    }
+  }
+  for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
+    const Index g = groupOf(Index(b));
     if (!groupMeets_[g]) continue;
-    const bool rest = groupRests_[g] || !groupNew_[g] || !(groupMass_[g] > 0);
-    const Vec3 shift = rest ? Vec3::Zero() : Vec3((groupShift_[g] / groupMass_[g]).cast<Scalar>());
-    const Vec3 velocity =
-        rest ? Vec3::Zero() : Vec3((groupMomentum_[g] / groupMass_[g]).cast<Scalar>());
+    const bool rest = rests(g);
+    const Vec3 shift = rest ? Vec3::Zero() : Vec3(groupShift_[g].cast<Scalar>());
+    const Vec3 velocity = rest ? Vec3::Zero() : Vec3(groupMomentum_[g].cast<Scalar>());
     if (rest && bodyBack_[b] != kBodyAtRest) ++stats.frozenBodies;
     if (!rest && bodyBack_[b] == kBodyFree) ++stats.bodiesMovedAsOne;
     bodyBack_[b] = rest ? kBodyAtRest : kBodyMovedAsOne;
+    bodyGroupSize_[b] = groupBodies_[g];
     const Body& body = topology.bodies[b];
     for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p) {
       state.position[p] = start[p] + shift;
@@ -729,6 +771,7 @@ void CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
   }
   for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
     groupMeets_[b] = groupRests_[b] = groupNew_[b] = 0;
+    groupBodies_[b] = 0;
     groupMass_[b] = 0;
     groupShift_[b].setZero();
     groupMomentum_[b].setZero();

@@ -28,10 +28,12 @@
 ///    where it started. The zones grow until nothing meets. A translating pass that finds the very
 ///    meetings of the pass before cannot part them, so the zones then stay where they started.
 /// 3. Should that still leave meetings after many passes, every body of a meeting goes back to
-///    where the substep started, at rest, with every body fitted onto it (an assembly goes back
-///    whole), and is measured again, until nothing meets: the start was free of crossings, so a
-///    body there meets nothing else that is there, and each pass puts back at least one more
-///    body. Bodies that met nothing keep their substep. Counted, never expected.
+///    where the substep started, with every body fitted onto it (an assembly goes back whole), and
+///    moves from there as one, lifted onto a ground plane it reached; where moving cannot part
+///    them (a pin, a static mesh, a group that meets again as it was) it stays there at rest. It
+///    is measured again, until nothing meets: the start was free of crossings, so a body there
+///    meets nothing else that is there, and each pass moves a body, joins two groups or puts one
+///    to rest. Bodies that met nothing keep their substep. Counted, never expected.
 ///
 /// A meeting of two primitives that were closer than the separation in the scene's initial state
 /// (a mesh finer than the skin, a sheet thinner than its thickness, parts of an assembly fitted
@@ -190,9 +192,10 @@ class CollisionFailsafe {
   /// side of the second.
   static bool crosses(const CollisionGeometry& geometry, std::span<const Vec3> start,
                       std::span<const Vec3> end, const FailsafeImpact& impact, double tolerance);
-  /// Whether the meeting's primitives were already within its tolerance where the substep starts
-  /// and end it no closer, on the same side: nothing crossed, and no stage here could leave them
-  /// further apart than the start, where a zone that stays puts them.
+  /// Whether the meeting's primitives end the substep no closer than they started it, on the same
+  /// side, along its normal (within rounding): nothing crossed. Within its tolerance at the start,
+  /// no stage here could leave them further apart than the start, where a zone that stays puts
+  /// them; within it only later, they came no closer than rounding takes them.
   static bool notClosing(const CollisionGeometry& geometry, std::span<const Vec3> start,
                          std::span<const Vec3> end, const FailsafeImpact& impact);
   void applyImpulses(const SceneTopology& topology, const CollisionGeometry& geometry,
@@ -204,8 +207,9 @@ class CollisionFailsafe {
                         const CollisionDetector& detector);
   /// Stage 3: the bodies of the latest meetings, each with every body that a meeting or a fit
   /// (joinFittedBodies()) joins to it, go back where the substep started; each such group moves
-  /// from there as one, with its mean displacement and velocity, or stays there at rest where
-  /// that cannot part it. Counts the bodies in `stats`.
+  /// from there as one, with its mean displacement and velocity (lifted onto a plane it would
+  /// reach, without its speed into the plane), or stays there at rest where that cannot part it.
+  /// Counts the bodies in `stats`.
   void putBodiesBack(const SceneTopology& topology, const CollisionGeometry& geometry,
                      std::span<const Vec3> start, SimulationState& state, FailsafeStats& stats);
   /// Calls `visit` with the vertices of each of the latest meetings: a meeting's four, a
@@ -256,12 +260,15 @@ class CollisionFailsafe {
   std::vector<std::uint8_t> inZone_;
   enum BodyBack : std::uint8_t { kBodyFree, kBodyMovedAsOne, kBodyAtRest };
   std::vector<std::uint8_t> bodyBack_;  ///< per body: what this substep's stage 3 did with it
+  std::vector<Index> bodyGroupSize_;    ///< per body: the bodies of the group it last moved with
   /// Scratch: union–find over bodies by their fitted pairs and their meetings in stage 3.
   std::vector<Index> bodyRoot_;
   /// Scratch, per group root of bodyRoot_: a meeting of this pass holds it, it must rest, it holds
-  /// a body stage 3 had not moved, and its mass, Σ m·displacement and Σ m·velocity.
+  /// a body stage 3 had not moved, and its mass, Σ m·displacement and Σ m·velocity (then the mean
+  /// displacement and velocity it moves with), and its lowest height above the plane at hand.
   std::vector<std::uint8_t> groupMeets_, groupRests_, groupNew_;
-  std::vector<double> groupMass_;
+  std::vector<double> groupMass_, groupLowest_;
+  std::vector<Index> groupBodies_;
   std::vector<Vec3d> groupShift_, groupMomentum_;
   std::vector<std::uint8_t>
       zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
