@@ -505,8 +505,7 @@ TEST(Failsafe, TheLastResortPutsBodiesHeldByAPinBackAtRest) {
 
 // An assembly that reaches the ground in the substep lands on it as one: the fitted sheets, turned
 // against each other while they fall from 2 mm above a ground plane to 1 mm below it. Put back at
-// rest where the substep started, as against what cannot move, they stopped in mid-air (assimp's
-// engine, above the ground, fell again for three frames).
+// rest where the substep started, as against what cannot move, they stopped 2 mm up in mid-air.
 TEST(Failsafe, TheLastResortLandsAnAssemblyThatReachesTheGroundOnIt) {
   SceneSetup setup = noGravity();
   setup.planes.push_back(PlaneCollider{});
