@@ -54,7 +54,7 @@ struct ParticleTarget {
   Vec3 normal;                       ///< unnormalised, as intersectSegmentTriangle computes it
   bool open;                         ///< the triangle's surface is open
   Vec3 startCorner, startNormal;     ///< corner 0 and normal at the substep's start (open only)
-  std::array<Vec3, 3> cornerMotion;  ///< each corner's displacement over the substep (open only)
+  std::array<Vec3, 3> cornerMotion;  ///< each corner's displacement over the substep
 };
 
 /// `now` and `normal`: the triangle's corners at the substep's end and their triangleNormal().

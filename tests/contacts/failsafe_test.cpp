@@ -270,12 +270,13 @@ std::vector<BodySetup> fittedSheets() {
   return bodies;
 }
 
-/// Turns the copy of fittedSheets() (body 1) against the lower sheet within the substep, one side
-/// down by twice the gap: by less than the separation a fit may give by.
-void turnCopyDown(Substep& step) {
-  const Body& copy = step.scene.topology.bodies[1];
+/// Turns the copy of fittedSheets() (body `copyBody`, its pair's left edge at x = `left`) against
+/// the lower sheet within the substep, one side down by twice the gap: by less than the separation
+/// a fit may give by.
+void turnCopyDown(Substep& step, Index copyBody = 1, Scalar left = -0.3f) {
+  const Body& copy = step.scene.topology.bodies[copyBody];
   for (Index p = copy.firstParticle; p < copy.firstParticle + copy.particleCount; ++p) {
-    const Scalar down = 2 * kFittedGap * (step.scene.state.position[p].x() + 0.3f) / 0.6f;
+    const Scalar down = 2 * kFittedGap * (step.scene.state.position[p].x() - left) / 0.6f;
     step.scene.state.position[p].y() -= down;
     step.scene.state.velocity[p].y() = -down / Scalar(kDt);
   }
@@ -562,12 +563,7 @@ TEST(Failsafe, TheLastResortMovesTwoGroupsThatMeetOnAsOne) {
       }
   }
   turnCopyDown(step);
-  const auto [first, last] = particlesOf(3);
-  for (Index p = first; p < last; ++p) {
-    const Scalar down = 2 * kFittedGap * (step.scene.state.position[p].x() - 0.15f) / 0.6f;
-    step.scene.state.position[p].y() -= down;
-    step.scene.state.velocity[p].y() = -down / Scalar(kDt);
-  }
+  turnCopyDown(step, 3, 0.15f);
   const Vec3d before = step.momentum();
   const FailsafeStats stats = step.apply();
   ASSERT_EQ(stats.frozen, 1u) << "the test needs the last resort";
