@@ -4,7 +4,7 @@
 // last frame. One markdown table row per scene: bench/contacts.sh writes bench/results/contacts.md
 // from them.
 //
-//   contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] [separate|ignore]
+//   contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] [set_aside|separate|ignore]
 //                 [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] [--frames=N]
 //                 [--deep=MICRONS]
 //   contact_cases --header     the table's header, two lines, for the scripts that print rows
@@ -73,10 +73,11 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (argc < 2) {
-    std::fprintf(stderr,
-                 "usage: contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] "
-                 "[separate|ignore] [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] "
-                 "[--frames=N] [--deep=MICRONS]\n       contact_cases --header\n");
+    std::fprintf(
+        stderr,
+        "usage: contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] "
+        "[set_aside|separate|ignore] [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] "
+        "[--frames=N] [--deep=MICRONS]\n       contact_cases --header\n");
     return 1;
   }
   std::FILE* csv = nullptr;
