@@ -736,15 +736,14 @@ void CollisionFailsafe::putBodiesBack(const SceneTopology& topology,
   // that reached the ground within the substep stopped above it, and fell again.
   for (const PlaneCollider& plane : topology.planes) {
     const Vec3d normal = plane.normal.cast<double>();
-    const double offset = normal.dot(plane.point.cast<double>());
     std::fill(groupLowest_.begin(), groupLowest_.end(), 0.0);
     for (std::size_t b = 0; b < bodyBack_.size(); ++b) {
       const Index g = groupOf(Index(b));
       if (!groupMeets_[g] || rests(g)) continue;
       const Body& body = topology.bodies[b];
       for (Index p = body.firstParticle; p < body.firstParticle + body.particleCount; ++p)
-        groupLowest_[g] = std::min(groupLowest_[g],
-                                   normal.dot(start[p].cast<double>() + groupShift_[g]) - offset);
+        groupLowest_[g] = std::min(
+            groupLowest_[g], heightAbove(plane, Vec3d(start[p].cast<double>() + groupShift_[g])));
     }
     for (std::size_t g = 0; g < bodyBack_.size(); ++g) {
       if (!(groupLowest_[g] < 0)) continue;

@@ -55,9 +55,11 @@ struct PlaneCollider {
 /// holds) holds for a particle that touches none.
 inline constexpr std::int32_t kNoPlane = -1;
 
-/// How far `x` lies above `plane`, along its normal (negative behind it).
-inline Scalar heightAbove(const PlaneCollider& plane, const Vec3& x) {
-  return plane.normal.dot(x - plane.point);
+/// How far `x` lies above `plane`, along its normal (negative behind it), in `x`'s precision.
+template <class V>
+typename V::Scalar heightAbove(const PlaneCollider& plane, const V& x) {
+  using S = typename V::Scalar;
+  return plane.normal.template cast<S>().dot(x - plane.point.template cast<S>());
 }
 
 /// Whether a particle at `x` is in contact with `plane`: closer than the skin, or behind it. The
