@@ -360,38 +360,47 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
   // move as one zone, which keeps them as they were at the start. So do the triangles of a meeting
   // that already intersect where the substep starts, between surfaces that did not overlap where
   // the scene started: a crossing let through before, whose meetings, left alone, let it deepen,
-  // and pushed along a normal oriented at the crossed start, drove it deeper still.
+  // and pushed along a normal oriented at the crossed start, drove it deeper still. A meeting
+  // that does not close along its own normal is rounding, unless its triangles end intersecting
+  // where they did not at the start: a vertex within the tolerance of a face that slides along
+  // it as the face turns up under its path stays as far from its foot as it began, yet ends
+  // under the face (an engine's shell, folded onto itself, passed through itself so). Its
+  // triangles move as one zone too.
   enum Verdict : std::uint8_t { kKeep, kDrop, kCrossing };
   verdicts_.resize(impacts_.size());
   crossingOf_.resize(impacts_.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, impacts_.size(), 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const FailsafeImpact& impact = impacts_[i];
-                        Verdict verdict = kKeep;
-                        const bool fitted = closeAtRest(topology, geometry, impact);
-                        if (fitted && !crosses(geometry, start, end, impact, impact.separation)) {
-                          const std::optional<TrianglePair> now =
-                              crossingTriangles(geometry, end, impact, Contact::Touching);
-                          verdict =
-                              now && !crossingTriangles(geometry, start, impact, Contact::Touching)
-                                  ? kCrossing
-                                  : kDrop;
-                          if (verdict == kCrossing) crossingOf_[i] = *now;
-                        } else if (notClosing(geometry, start, end, impact)) {
-                          verdict = kDrop;
-                        } else if (const std::optional<TrianglePair> before = crossingTriangles(
-                                       geometry, start, impact, Contact::Crossing)) {
-                          if (fitted || betweenOverlapping(geometry, impact)) {
-                            verdict = kDrop;
-                          } else {
-                            verdict = kCrossing;
-                            crossingOf_[i] = *before;
-                          }
-                        }
-                        verdicts_[i] = verdict;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, impacts_.size(), 16),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const FailsafeImpact& impact = impacts_[i];
+          // Triangles of the meeting that intersect at the end and did not at the start.
+          const auto newlyCrossing = [&](Contact contact) -> std::optional<TrianglePair> {
+            const std::optional<TrianglePair> now =
+                crossingTriangles(geometry, end, impact, contact);
+            if (now && !crossingTriangles(geometry, start, impact, contact)) return now;
+            return std::nullopt;
+          };
+          const auto zoneOrDrop = [&](const std::optional<TrianglePair>& crossing) {
+            if (!crossing) return kDrop;
+            crossingOf_[i] = *crossing;
+            return kCrossing;
+          };
+          Verdict verdict = kKeep;
+          const bool fitted = closeAtRest(topology, geometry, impact);
+          if (fitted && !crosses(geometry, start, end, impact, impact.separation)) {
+            verdict = zoneOrDrop(newlyCrossing(Contact::Touching));
+          } else if (notClosing(geometry, start, end, impact)) {
+            verdict = betweenOverlapping(geometry, impact)
+                          ? kDrop
+                          : zoneOrDrop(newlyCrossing(Contact::Crossing));
+          } else if (const std::optional<TrianglePair> before =
+                         crossingTriangles(geometry, start, impact, Contact::Crossing)) {
+            verdict = fitted || betweenOverlapping(geometry, impact) ? kDrop : zoneOrDrop(before);
+          }
+          verdicts_[i] = verdict;
+        }
+      });
   crossings_.clear();
   std::size_t kept = 0;
   for (std::size_t i = 0; i < impacts_.size(); ++i) {
