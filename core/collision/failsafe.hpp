@@ -47,9 +47,13 @@
 /// against each other, and two stacked faces lifted to one height above the ground overlap in a
 /// plane; neither is a side any test sees change. Such a pair is not pushed (pushing fitted faces
 /// apart blew an assembly of 55 fitted parts up): its two triangles go into one zone (stage 2),
-/// which keeps them as they were at the start. So is a meeting already within its
-/// tolerance where the substep starts that ends it no closer on the same side: nothing crossed,
-/// and no stage here can leave it further apart than the start.
+/// which keeps them as they were at the start. A meeting already within its tolerance where the
+/// substep starts that ends it no closer on the same side is left alone too: along its normal
+/// nothing crossed, and no stage here can leave it further apart than the start. Unless its
+/// triangles end intersecting where they did not at the start, between surfaces that did not
+/// overlap in the scene's initial state: a vertex sliding along a face that turns up under its
+/// path ends under the face no closer to its foot, and an engine's shell passed through itself so.
+/// Those triangles go into one zone too.
 ///
 /// Surfaces that intersect each other are not held apart: holding them would hold them in their
 /// tangle. The simulator names them (leaveTangled) where the scene starts and again at every frame
