@@ -282,6 +282,21 @@ void turnCopyDown(Substep& step, Index copyBody = 1, Scalar left = -0.3f) {
   }
 }
 
+/// Applies the failsafe to `step`, whose surfaces start apart and would end it crossing
+/// (`leftAlone` says how): zones, not the last resort, keep them apart, with their momentum.
+void expectZonesKeepApart(Substep& step, const char* leftAlone) {
+  ASSERT_EQ(
+      test::countIntersectingPairs(step.scene.collision, step.scene.substepStart).betweenSurfaces,
+      0u);
+  ASSERT_GT(step.intersections().betweenSurfaces, 0u) << leftAlone;
+  const Vec3d before = step.momentum();
+  const FailsafeStats stats = step.apply();
+  EXPECT_GT(stats.zoneParticles, 0u);
+  EXPECT_EQ(stats.frozen, 0u);
+  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
+  EXPECT_LT((step.momentum() - before).norm(), 1e-6 * step.momentumScale() + 1e-12);
+}
+
 /// Two sheets modelled as near-copies of each other, 13 µm apart (parts of an imported model: a
 /// spider's two shells), are fitted: closer than the skin where the scene starts, so the failsafe
 /// leaves them to give. Within one substep the upper one comes down onto the lower one's plane (as
@@ -295,16 +310,7 @@ TEST(Failsafe, FittedNearCopiesThatMeetWithinTheFitEndApart) {
     setup.bodies = fittedSheets();
     Substep step(setup, {Vec3(0, 0, 0), Vec3(0, turn ? 0 : -kFittedGap, 0)});
     if (turn) turnCopyDown(step);
-    ASSERT_EQ(
-        test::countIntersectingPairs(step.scene.collision, step.scene.substepStart).betweenSurfaces,
-        0u);
-    ASSERT_GT(step.intersections().betweenSurfaces, 0u) << "left alone, the sheets would meet";
-    const Vec3d before = step.momentum();
-    const FailsafeStats stats = step.apply();
-    EXPECT_GT(stats.zoneParticles, 0u);
-    EXPECT_EQ(stats.frozen, 0u);
-    EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
-    EXPECT_LT((step.momentum() - before).norm(), 1e-6 * step.momentumScale() + 1e-12);
+    expectZonesKeepApart(step, "left alone, the sheets would meet");
   }
 }
 
@@ -733,16 +739,7 @@ TEST(Failsafe, AMeetingThatDoesNotCloseYetEndsCrossingDoesNotCross) {
     step.scene.state.position[p].y() += up;
     step.scene.state.velocity[p].y() = up / Scalar(kDt);
   }
-  ASSERT_EQ(
-      test::countIntersectingPairs(step.scene.collision, step.scene.substepStart).betweenSurfaces,
-      0u);
-  ASSERT_GT(step.intersections().betweenSurfaces, 0u) << "left alone, the corner ends under";
-  const Vec3d before = step.momentum();
-  const FailsafeStats stats = step.apply();
-  EXPECT_GT(stats.zoneParticles, 0u);
-  EXPECT_EQ(stats.frozen, 0u);
-  EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
-  EXPECT_LT((step.momentum() - before).norm(), 1e-6 * step.momentumScale() + 1e-12);
+  expectZonesKeepApart(step, "left alone, the corner ends under");
 }
 
 TEST(Failsafe, GivesTheSameResultForAnyNumberOfThreads) {
