@@ -67,6 +67,14 @@ struct Substep {
       }
     }
   }
+  /// Lowers body `body` by `down`, where the substep starts and where it ends alike.
+  void lower(Index body, Scalar down) {
+    const Body& b = scene.topology.bodies[body];
+    for (Index p = b.firstParticle; p < b.firstParticle + b.particleCount; ++p) {
+      scene.substepStart[p].y() -= down;
+      scene.state.position[p].y() -= down;
+    }
+  }
   FailsafeStats apply() {
     return failsafe.apply(scene.topology, scene.collision, detector, scene.substepStart,
                           scene.state, kDt);
@@ -117,11 +125,7 @@ void lowerBallTo(Substep& step, Scalar gap) {
   const Index begin = ballBody.firstParticle, end = begin + ballBody.particleCount;
   Scalar lowest = 1e9f;
   for (Index p = begin; p < end; ++p) lowest = std::min(lowest, step.scene.substepStart[p].y());
-  const Scalar down = lowest - gap;
-  for (Index p = begin; p < end; ++p) {
-    step.scene.substepStart[p].y() -= down;
-    step.scene.state.position[p].y() -= down;
-  }
+  step.lower(1, lowest - gap);
 }
 
 TEST(Failsafe, BallsThrownDeepIntoEachOtherEndApartWithTheirMomentum) {
@@ -597,11 +601,7 @@ TEST(Failsafe, SheetsCarriedAlongTogetherAtTheToleranceDoNotMeet) {
     const Vec3 carried = Scalar(k) * Vec3(0.0314159f, -0.0271828f, 0.0141421f);
     Substep step(setup, {carried, carried});
     const Scalar down = Scalar(2 * separation - step.failsafe.tolerance() * (1 + 1e-4));
-    const Body& copy = step.scene.topology.bodies[1];
-    for (Index p = copy.firstParticle; p < copy.firstParticle + copy.particleCount; ++p) {
-      step.scene.substepStart[p].y() -= down;
-      step.scene.state.position[p].y() -= down;
-    }
+    step.lower(1, down);
     impacts += step.apply().impacts;
   }
   EXPECT_EQ(impacts, 0u);
@@ -683,11 +683,7 @@ TEST(Failsafe, ACrossingBetweenSurfacesApartAtTheStartDoesNotDeepen) {
   for (const bool overlappedAtStart : {false, true}) {
     SCOPED_TRACE(overlappedAtStart ? "overlapping at the scene's start" : "apart at the start");
     Substep step(setup, {Vec3(0, 0, 0), Vec3(0, -kSink, 0)});
-    const Body& cube = step.scene.topology.bodies[1];
-    for (Index p = cube.firstParticle; p < cube.firstParticle + cube.particleCount; ++p) {
-      step.scene.substepStart[p].y() -= 0.01f + kInto;
-      step.scene.state.position[p].y() -= 0.01f + kInto;
-    }
+    step.lower(1, 0.01f + kInto);
     const double before = deepestCrossing(step.scene.collision, step.scene.substepStart);
     ASSERT_GT(before, 0.5 * kInto);
     const double unchecked = deepestCrossing(step.scene.collision, step.scene.state.position);
@@ -728,11 +724,7 @@ TEST(Failsafe, AMeetingThatDoesNotCloseYetEndsCrossingDoesNotCross) {
   const Vec3f foot(0.03f, 0, 0.03f);
   setup.bodies = {flat, cubeOnACorner("cube", foot + Vec3f(0, 0.01f, 0), 0.05f)};
   Substep step(setup, {Vec3(0, 0, 0), Vec3(kSlide, 0, 0)});
-  const Body& cube = step.scene.topology.bodies[1];
-  for (Index p = cube.firstParticle; p < cube.firstParticle + cube.particleCount; ++p) {
-    step.scene.substepStart[p].y() -= 0.01f - kAbove;
-    step.scene.state.position[p].y() -= 0.01f - kAbove;
-  }
+  step.lower(1, 0.01f - kAbove);
   const Body& flatBody = step.scene.topology.bodies[0];
   for (Index p = flatBody.firstParticle; p < flatBody.firstParticle + flatBody.particleCount; ++p) {
     const Scalar up = kTurn * (step.scene.state.position[p].x() - foot.x());
