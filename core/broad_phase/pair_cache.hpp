@@ -54,8 +54,11 @@ class PairCache {
   /// instead. Measured on figure 7 and balls1m (bench/results/integrators.md).
   static constexpr double kRebuildShare = 0.25;
   /// The first rebuild halves the margin until the cache holds at most this many times the exact
-  /// pairs. Figure 7 and the ball piles hold about 4 times at the default margin.
-  static constexpr std::size_t kMostCachedPerPair = 8;
+  /// pairs. Figure 7, the piles and balls100k hold 2.6 to 3.4 times at the default margin and keep
+  /// it. An engine of 110k faces, whose failsafe filters the cache 10 to 25 times a substep,
+  /// baked a frame 14% faster at 4 than at 8, and 19% at 2, where balls100k was 13% slower
+  /// (bench/results/assemblies.md).
+  static constexpr std::size_t kMostCachedPerPair = 4;
 
  private:
   void filter(const BroadPhaseInput& input, std::vector<TrianglePair>& pairs,
