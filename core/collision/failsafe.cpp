@@ -144,6 +144,7 @@ CollisionFailsafe::CollisionFailsafe(const SceneTopology& topology,
   zoneParent_.resize(geometry.particleCount);
   std::iota(zoneParent_.begin(), zoneParent_.end(), Index(0));
   zoneFixed_.assign(geometry.particleCount, 0);
+  gravityTaken_.assign(geometry.particleCount, 0);
   zoneMass_.assign(geometry.particleCount, 0);
   zoneShift_.assign(geometry.particleCount, Vec3d::Zero());
   zoneVelocity_.assign(geometry.particleCount, Vec3d::Zero());
@@ -634,7 +635,10 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
     const double m = topology.mass[v];
     zoneMass_[root] += m;
     zoneShift_[root] += m * (state.position[v] - start[v]).cast<double>();
-    zoneVelocity_[root] += m * state.velocity[v].cast<double>();
+    // A particle a staying zone placed before has had the gravity taken once already.
+    Vec3d velocity = state.velocity[v].cast<double>();
+    if (gravityTaken_[v]) velocity += stayFor * topology.settings.gravity.cast<double>();
+    zoneVelocity_[root] += m * velocity;
   }
   for (Index v : zoneMembers_) {
     const Index root = zoneOf(v);
@@ -650,6 +654,7 @@ std::size_t CollisionFailsafe::moveZones(const SceneTopology& topology,
       state.velocity[v] = (zoneVelocity_[root] / zoneMass_[root] -
                            stayFor * topology.settings.gravity.cast<double>())
                               .cast<Scalar>();
+      gravityTaken_[v] = 1;
     } else {
       state.position[v] = start[v] + (zoneShift_[root] / zoneMass_[root]).cast<Scalar>();
       state.velocity[v] = (zoneVelocity_[root] / zoneMass_[root]).cast<Scalar>();
@@ -799,6 +804,7 @@ void CollisionFailsafe::clearZones() {
     zoneParent_[v] = v;
     zoneFixed_[v] = 0;
     inZone_[v] = 0;
+    gravityTaken_[v] = 0;
   }
   zoneMembers_.clear();
 }

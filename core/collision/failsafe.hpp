@@ -275,7 +275,9 @@ class CollisionFailsafe {
   std::vector<Index> groupBodies_;
   std::vector<Vec3d> groupShift_, groupMomentum_;
   std::vector<std::uint8_t>
-      zoneFixed_;                 ///< per zone root: holds a pinned, static or plane particle
+      zoneFixed_;  ///< per zone root: holds a pinned, static or plane particle
+  /// Per particle: a staying zone placed it, and took the substep's gravity from its velocity.
+  std::vector<std::uint8_t> gravityTaken_;
   std::vector<double> zoneMass_;  ///< per zone root, and its momentum over the substep:
   std::vector<Vec3d> zoneShift_, zoneVelocity_;  ///< Σ m·displacement, Σ m·velocity
 };
