@@ -455,7 +455,7 @@ TEST(Failsafe, ZonesThatStayUnderGravityLoseTheSubstepsGravityOnce) {
   ASSERT_EQ(stats.frozen, 0u);
   ASSERT_GE(stats.passes, 3u);  // the two that meet stay, and the third meets them there
   EXPECT_EQ(step.intersections().betweenSurfaces, 0u);
-  // Every particle that stayed is in a zone: each ball was thrown, so none ends at its start else.
+  // A particle that ends at its start stayed in a zone: every ball was thrown.
   double stayed = 0;
   for (std::size_t p = 0; p < step.scene.state.particleCount(); ++p)
     if (step.scene.state.position[p] == step.scene.substepStart[p])
