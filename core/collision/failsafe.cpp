@@ -353,20 +353,12 @@ bool CollisionFailsafe::findImpacts(const SceneTopology& topology,
   std::sort(impacts_.begin(), impacts_.end(), lessImpact);
   impacts_.erase(std::unique(impacts_.begin(), impacts_.end(), sameImpact), impacts_.end());
   // Each meeting's verdict, in parallel (the intersection tests dominate an assembly's pass),
-  // then the kept ones in order. A fitted meeting is left to give, unless its triangles now
-  // intersect where they did not at the start: faces modelled as near-copies of each other (two
-  // parts of a spider, 13 µm apart against a 1 mm skin) intersect by their nearly parallel edges
-  // as soon as they turn against each other, a crossing no side test sees. Such a meeting is not
-  // pushed (pushing fitted faces apart blew an assembly of 55 fitted parts up); its two triangles
-  // move as one zone, which keeps them as they were at the start. So do the triangles of a meeting
-  // that already intersect where the substep starts, between surfaces that did not overlap where
-  // the scene started: a crossing let through before, whose meetings, left alone, let it deepen,
-  // and pushed along a normal oriented at the crossed start, drove it deeper still. A meeting
-  // that does not close along its own normal is rounding, unless its triangles end intersecting
-  // where they did not at the start: a vertex within the tolerance of a face that slides along
-  // it as the face turns up under its path stays as far from its foot as it began, yet ends
-  // under the face (an engine's shell, folded onto itself, passed through itself so). Its
-  // triangles move as one zone too.
+  // then the kept ones in order. The rules, and why each holds, are in the header. A fitted
+  // meeting gives, unless its triangles come to touch. One that does not close is dropped, unless
+  // its triangles end crossing where they did not, between surfaces apart at the scene's start.
+  // One whose triangles crossed already at the substep's start is dropped if it is fitted or its
+  // surfaces overlapped at the scene's start. The exceptions' triangles are zoned whole
+  // (kCrossing), never pushed.
   enum Verdict : std::uint8_t { kKeep, kDrop, kCrossing };
   verdicts_.resize(impacts_.size());
   crossingOf_.resize(impacts_.size());
