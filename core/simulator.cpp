@@ -49,6 +49,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
     detector_.ignoreOverlaps(initialOverlaps_);
   } else if (setAside) {
     initiallySetAside_ = initialOverlaps_.pairs;
+    overlappingSurfaces_ = overlappingSurfaces(initialOverlaps_);
     // A pair set aside that no longer intersects is as close as a fit at first: it is left to
     // the failsafe until it is apart by the skin, or the response would throw the parts apart
     // where their overlap ends.
@@ -116,7 +117,7 @@ void Simulator::step(int frame) {
     // them the paper's response is the whole answer, and its own test stands.
     const CollisionResponseStats responses = respondToCollisions(
         topology, collision_, detector_, response, state_, contacts_, edgePushes_, tangled,
-        stepContacts_ ? InsideTest::NearestFace : InsideTest::StruckFace);
+        stepContacts_ ? InsideTest::NearestFace : InsideTest::StruckFace, overlappingSurfaces_);
     clock.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();

@@ -149,6 +149,9 @@ class Simulator {
   /// Set when bodies start inside each other under initial_overlap "separate".
   std::optional<Detangler> detangler_;
   InitialOverlaps initialOverlaps_;
+  /// Under initial_overlap "set_aside", the surface pairs that overlapped at the start, whose edges
+  /// the response does not push (core/collision/response.hpp). Sorted.
+  std::vector<std::pair<Index, Index>> overlappingSurfaces_;
   /// The triangle pairs set aside at the start (all that intersected under "set_aside", a body's
   /// own under "separate"), sorted; and scratch for those still set aside.
   std::vector<TrianglePair> initiallySetAside_, setAsideScratch_;

@@ -22,17 +22,25 @@ struct ResponseScene {
       topology.settings.skin;  ///< left between a responding particle and the surface
   std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
   InsideTest inside = InsideTest::StruckFace;           ///< what counts an edge end inside
+  std::span<const std::pair<Index, Index>> unpushed;    ///< surface pairs, sorted
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
   bool leftAlone(Index surfaceA, Index surfaceB) const {
-    return !leaveAlone.empty() && std::binary_search(leaveAlone.begin(), leaveAlone.end(),
-                                                     std::pair(std::min(surfaceA, surfaceB),
-                                                               std::max(surfaceA, surfaceB)));
+    return among(leaveAlone, surfaceA, surfaceB);
+  }
+  static bool among(std::span<const std::pair<Index, Index>> pairs, Index surfaceA,
+                    Index surfaceB) {
+    return !pairs.empty() && std::binary_search(pairs.begin(), pairs.end(),
+                                                std::pair(std::min(surfaceA, surfaceB),
+                                                          std::max(surfaceA, surfaceB)));
   }
 };
 
+/// Whether the edge pushes leave `edge` alone: tangled, or between surfaces that overlapped at the
+/// scene's start.
 bool leftAlone(const ResponseScene& scene, const EdgeContact& edge) {
-  return scene.leftAlone(scene.geometry.triangleSurface[edge.edgeTriangle],
-                         scene.geometry.triangleSurface[edge.triangle]);
+  const Index a = scene.geometry.triangleSurface[edge.edgeTriangle];
+  const Index b = scene.geometry.triangleSurface[edge.triangle];
+  return scene.leftAlone(a, b) || ResponseScene::among(scene.unpushed, a, b);
 }
 
 /// One side of a contact as weighted vertices: the struck surface's (up to two triangles'
@@ -462,8 +470,10 @@ CollisionResponseStats respondToCollisions(const SceneTopology& topology,
                                            SimulationState& state, std::vector<Contact>& contacts,
                                            EdgePushes& edgePushes,
                                            std::span<const std::pair<Index, Index>> leaveAlone,
-                                           InsideTest inside) {
-  const ResponseScene scene{topology, state, geometry, topology.settings.skin, leaveAlone, inside};
+                                           InsideTest inside,
+                                           std::span<const std::pair<Index, Index>> overlapping) {
+  const ResponseScene scene{topology,   state,  geometry,   topology.settings.skin,
+                            leaveAlone, inside, overlapping};
   CollisionResponseStats stats;
   contacts.clear();
   respondToParticleContacts(scene, detector.particleContacts(), mode, contacts, stats);

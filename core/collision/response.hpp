@@ -27,6 +27,15 @@
 /// the springs stored that as energy, and the run blew up at frame 13 under every integrator. The
 /// second pass measures again what the first, scaled down, left inside.
 ///
+/// Between two surfaces that overlapped where the scene started (initial_overlap "set_aside"),
+/// edges are not pushed: an edge of one part inside the other lies there by design, and as the
+/// parts deform their overlap slides onto edges whose triangles did not intersect at the start.
+/// Pushing those out fought the overlap's springs in every substep: assimp's regr01.obj (55 nested
+/// parts) at rest took 90 J a frame from the pushes and gave it back to the integrator, its energy
+/// crept up by 31 J over 38 frames, and the response and failsafe cost 1.5 times as much
+/// (bench/results/assemblies.md). Particle segments there still respond to what crossed in the
+/// substep, and the failsafe still keeps apart what did not overlap.
+///
 /// Contacts are handled one after the other in the detector's sorted order: the result does not
 /// depend on the number of threads.
 
@@ -169,13 +178,15 @@ std::optional<RimCrossing> findRimCrossing(const CollisionGeometry& geometry,
 /// ResponseMode::None, moves the particles and sets their velocities as described above. Contacts
 /// between the surface pairs of `leaveAlone` (sorted, lower surface first) are recorded but not
 /// responded to: surfaces that start inside each other, which the Detangler takes apart. `inside`
-/// is the edge pushes' test of an end inside a surface.
-CollisionResponseStats respondToCollisions(const SceneTopology& topology,
-                                           const CollisionGeometry& geometry,
-                                           const CollisionDetector& detector, ResponseMode mode,
-                                           SimulationState& state, std::vector<Contact>& contacts,
-                                           EdgePushes& edgePushes,
-                                           std::span<const std::pair<Index, Index>> leaveAlone = {},
-                                           InsideTest inside = InsideTest::StruckFace);
+/// is the edge pushes' test of an end inside a surface. The edges of the surface pairs of
+/// `overlapping` (sorted, lower surface first: those that overlapped where the scene started) are
+/// not pushed.
+CollisionResponseStats respondToCollisions(
+    const SceneTopology& topology, const CollisionGeometry& geometry,
+    const CollisionDetector& detector, ResponseMode mode, SimulationState& state,
+    std::vector<Contact>& contacts, EdgePushes& edgePushes,
+    std::span<const std::pair<Index, Index>> leaveAlone = {},
+    InsideTest inside = InsideTest::StruckFace,
+    std::span<const std::pair<Index, Index>> overlapping = {});
 
 }  // namespace softbake
