@@ -32,9 +32,8 @@
 /// parts deform their overlap slides onto edges whose triangles did not intersect at the start.
 /// Pushing those out fought the overlap's springs in every substep: assimp's regr01.obj (55 nested
 /// parts) at rest took 90 J a frame from the pushes and gave it back to the integrator, its energy
-/// crept up by 31 J over 38 frames, and the response and failsafe cost 1.5 times as much
-/// (bench/results/assemblies.md). Particle segments there still respond to what crossed in the
-/// substep, and the failsafe still keeps apart what did not overlap.
+/// crept up by 31 J over 30 frames (bench/results/assemblies.md). Particle segments there still
+/// respond to what crossed in the substep, and the failsafe still keeps apart what did not overlap.
 ///
 /// Contacts are handled one after the other in the detector's sorted order: the result does not
 /// depend on the number of threads.
