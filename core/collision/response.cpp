@@ -20,9 +20,9 @@ struct ResponseScene {
   const CollisionGeometry& geometry;
   const Scalar skin =
       topology.settings.skin;  ///< left between a responding particle and the surface
-  std::span<const std::pair<Index, Index>> leaveAlone;  ///< surface pairs, sorted
-  InsideTest inside = InsideTest::StruckFace;           ///< what counts an edge end inside
-  std::span<const std::pair<Index, Index>> unpushed;    ///< surface pairs, sorted
+  std::span<const std::pair<Index, Index>> leaveAlone;   ///< surface pairs, sorted
+  InsideTest inside = InsideTest::StruckFace;            ///< what counts an edge end inside
+  std::span<const std::pair<Index, Index>> overlapping;  ///< surface pairs, sorted
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
   bool leftAlone(Index surfaceA, Index surfaceB) const {
     return among(leaveAlone, surfaceA, surfaceB);
@@ -40,7 +40,7 @@ struct ResponseScene {
 bool leftAlone(const ResponseScene& scene, const EdgeContact& edge) {
   const Index a = scene.geometry.triangleSurface[edge.edgeTriangle];
   const Index b = scene.geometry.triangleSurface[edge.triangle];
-  return scene.leftAlone(a, b) || ResponseScene::among(scene.unpushed, a, b);
+  return scene.leftAlone(a, b) || ResponseScene::among(scene.overlapping, a, b);
 }
 
 /// One side of a contact as weighted vertices: the struck surface's (up to two triangles'

@@ -283,7 +283,7 @@ TEST(InitialOverlap, SetAsideLeavesTheOverlapAloneWithoutMovingAnything) {
 /// lie inside the other ball by design, and the response leaves them there: set aside means
 /// nothing is pushed apart. When it pushed them out, it pushed the balls out of each other over
 /// frames 9 to 24, 1 362 pushes a frame at the most, and the energy rose by 0.22 J and 0.45 J on
-/// two frames (the springs and the volume term took what the pushes stored).
+/// two frames.
 TEST(InitialOverlap, EdgesOfPartsThatOverlapAtTheStartAreNotPushedOutOfEachOther) {
   SceneSetup scene = twoBalls(0.8f);
   scene.settings.gravity = Vec3(0, -9.81f, 0);
