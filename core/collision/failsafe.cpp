@@ -167,8 +167,7 @@ bool CollisionFailsafe::betweenOverlapping(const CollisionGeometry& geometry,
   const Index first = surface(impact.vertex[0]);
   const Index second =
       impact.edge ? surface(impact.vertex[2]) : geometry.triangleSurface[impact.face];
-  return std::binary_search(overlapping_.begin(), overlapping_.end(),
-                            std::pair{std::min(first, second), std::max(first, second)});
+  return holdsSurfacePair(overlapping_, first, second);
 }
 
 FailsafeStats CollisionFailsafe::apply(const SceneTopology& topology,

@@ -6,6 +6,7 @@
 /// particles. So a collision triangle, a surface or a vertex is one integer everywhere in the
 /// pipeline, and the broad phases need no notion of "soft" or "static".
 
+#include <algorithm>
 #include <span>
 #include <utility>
 #include <vector>
@@ -86,6 +87,14 @@ struct CollisionGeometry {
     return input;
   }
 };
+
+/// Whether surfaces `a` and `b`, in either order, are a pair of `surfacePairs` (sorted, lower
+/// surface first).
+inline bool holdsSurfacePair(std::span<const std::pair<Index, Index>> surfacePairs, Index a,
+                             Index b) {
+  return !surfacePairs.empty() && std::binary_search(surfacePairs.begin(), surfacePairs.end(),
+                                                     std::pair(std::min(a, b), std::max(a, b)));
+}
 
 /// Removes from `pairs` the triangle pairs between the surfaces of `surfacePairs` (sorted, lower
 /// surface first; a surface with itself for pairs within one).

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/collision/continuous_collision.hpp"
+#include "core/collision/geometry.hpp"
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
 
@@ -25,13 +26,7 @@ struct ResponseScene {
   std::span<const std::pair<Index, Index>> overlapping;  ///< surface pairs, sorted
   const Vec3& vertex(Index v) const { return geometry.vertex(state.position, v); }
   bool leftAlone(Index surfaceA, Index surfaceB) const {
-    return among(leaveAlone, surfaceA, surfaceB);
-  }
-  static bool among(std::span<const std::pair<Index, Index>> pairs, Index surfaceA,
-                    Index surfaceB) {
-    return !pairs.empty() && std::binary_search(pairs.begin(), pairs.end(),
-                                                std::pair(std::min(surfaceA, surfaceB),
-                                                          std::max(surfaceA, surfaceB)));
+    return holdsSurfacePair(leaveAlone, surfaceA, surfaceB);
   }
 };
 
@@ -40,7 +35,7 @@ struct ResponseScene {
 bool leftAlone(const ResponseScene& scene, const EdgeContact& edge) {
   const Index a = scene.geometry.triangleSurface[edge.edgeTriangle];
   const Index b = scene.geometry.triangleSurface[edge.triangle];
-  return scene.leftAlone(a, b) || ResponseScene::among(scene.overlapping, a, b);
+  return scene.leftAlone(a, b) || holdsSurfacePair(scene.overlapping, a, b);
 }
 
 /// One side of a contact as weighted vertices: the struck surface's (up to two triangles'
