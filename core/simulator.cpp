@@ -50,6 +50,7 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   } else if (setAside) {
     initiallySetAside_ = initialOverlaps_.pairs;
     overlappingSurfaces_ = overlappingSurfaces(initialOverlaps_);
+    if (stepContacts_) stepContacts_->leaveOverlapping(overlappingSurfaces_);
     // A pair set aside that no longer intersects is as close as a fit at first: it is left to
     // the failsafe until it is apart by the skin, or the response would throw the parts apart
     // where their overlap ends.

@@ -108,11 +108,15 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
     return restNormal.dot(rest(v) - rest(corners[0]));
   };
   // A vertex that only fitted pairs bring (parts of an assembly fitted onto each other), placed in
-  // front of another surface's triangle within the gap, is held once it is behind that face, where
-  // it is: its spring stops it going deeper and never pushes it out, so the fit gives as before
-  // and stores no energy. Left to the failsafe alone, which counts a fitted crossing only beyond
-  // its separation and leaves one already crossed alone, such vertices of an engine sank through
-  // their mates 171 µm deep by frame 13 (bench/results/assemblies.md). Behind a closed surface is
+  // front of another surface's triangle within the gap, is held no nearer that face than it was
+  // placed, or than it is where it has come nearer: its spring stops it going deeper and never
+  // pushes it out, so the fit stores no energy, and once behind the face it is held where it is.
+  // Left to the failsafe alone, which counts a fitted crossing only beyond its separation and
+  // leaves one already crossed alone, such vertices of an engine sank through their mates 171 µm
+  // deep by frame 13 (bench/results/assemblies.md). Left to it while still in front, a block
+  // fitted on another sank into its base in every substep, by the substep's fall, and was lifted
+  // back by the failsafe and the edge pushes, 600 to 1 000 meetings a frame: it crept 27 mm in
+  // two seconds (bench/results/contacts.md). Behind a closed surface is
   // inside it (tangled, or left to the response and the failsafe), but a vertex its own closed
   // surface placed in front of the triangle within the gap (a part's walls or fillets modelled
   // closer than the skin) is held so too: the failsafe gives such meetings as it gives fits, and
@@ -121,9 +125,12 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   const bool closedBehind = behind && geometry.surfaceClosed[surface];
   const bool hold = holdOnly ? vertexSurface != surface : closedBehind && vertexSurface == surface;
   if (hold) {
-    // Still in front, it gives. Placed behind the face, it started inside: an overlap set aside,
-    // which may slide out of itself.
-    if (!behind || !placedWithinGap() || placedInFront() < 0) return;
+    // Placed behind the face, it started inside: an overlap set aside, which may slide out of
+    // itself. (A hold of its own closed surface is behind.) Between surfaces that overlapped at
+    // the start, one still in front gives: held there, the rim of two balls placed into each
+    // other held against the set-aside overlap beside it, and pushed the balls apart.
+    if (!placedWithinGap() || placedInFront() < 0) return;
+    if (!behind && holdsSurfacePair(overlapping_, surface, vertexSurface)) return;
   } else if (holdOnly || closedBehind) {
     return;
   } else if (behind) {
@@ -177,9 +184,10 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   // the normal as the stencil measures: held to the whole gap, each part pushed its own walls
   // apart and into the next part, and an engine of 115 parts took four times as long a step. (A
   // flat flag's vertices lie in the plane of all its triangles, but within the gap of few: its
-  // folds are held to the gap.) A hold (above) keeps the vertex where it is.
+  // folds are held to the gap.) A hold (above) keeps the vertex no nearer than it was placed or
+  // is now, whichever is nearer: behind the face, where it is.
   if (hold) {
-    keep = distance;
+    keep = std::min(distance, placedInFront());
   } else if (vertexSurface == surface && placedWithinGap()) {
     const Scalar placed = placedInFront();
     keep = std::min(keep, std::max(Scalar(0), behind ? -placed : placed));

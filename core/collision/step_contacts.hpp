@@ -22,17 +22,19 @@
 /// alone here too; a vertex its own surface placed within the gap of a triangle (the walls and
 /// fillets of a CAD part, a folded sheet) is kept no closer than it was placed, and once behind
 /// such a triangle of a closed surface (inside it), held where it is. The detector's
-/// fitted pairs (faces of two parts fitted closer than the skin) give as the failsafe lets them,
-/// but a vertex only they bring, once behind the face it was placed in front of, is held where it
-/// is: no deeper, never pushed out. Their stencils are marked `fitted`, and the solve never raises
-/// their force beyond the spring's own (core/dynamics/contact_springs.hpp).
-/// Each (vertex, triangle) the pairs bring is measured once, by chunks of triangles whose buffers
-/// are joined in order and sorted by (vertex, triangle), so the stencils are the same for any
-/// thread count.
+/// fitted pairs (faces of two parts fitted closer than the skin) are the failsafe's, but a vertex
+/// only they bring is held no nearer the face it was placed in front of than it was placed, or
+/// than it has come, and once behind it where it is: no deeper, never pushed out. (Between
+/// surfaces that overlapped at the start, one still in front gives.) Their stencils are marked
+/// `fitted`, and the solve never raises their force beyond the spring's own
+/// (core/dynamics/contact_springs.hpp). Each (vertex, triangle) the pairs bring is measured once,
+/// by chunks of triangles whose buffers are joined in order and sorted by (vertex, triangle), so
+/// the stencils are the same for any thread count.
 
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/broad_phase/broad_phase.hpp"
@@ -62,6 +64,12 @@ class StepContacts {
                                        CollisionDetector& detector, const SimulationState& state,
                                        Scalar dt);
 
+  /// The surface pairs that intersected at the start (sorted, lower first), under
+  /// initial_overlap "set_aside": between them a fitted vertex in front of its mate gives.
+  void leaveOverlapping(std::vector<std::pair<Index, Index>> surfacePairs) {
+    overlapping_ = std::move(surfacePairs);
+  }
+
   /// Appends a ContactKind::Held contact for each stencil of the latest find() that `held` (one
   /// flag per stencil) marks, at the vertex's position in `positions`.
   void appendHeld(const CollisionGeometry& geometry, std::span<const char> held,
@@ -77,8 +85,9 @@ class StepContacts {
                  std::span<const Vec3> start, Index v, Index triangle,
                  std::vector<Found>& out) const;
 
-  std::vector<Scalar> gap_;           ///< per surface: the distance its contacts keep
-  std::vector<Index> vertexSurface_;  ///< per collision vertex: its surface
+  std::vector<Scalar> gap_;  ///< per surface: the distance its contacts keep
+  std::vector<std::pair<Index, Index>> overlapping_;  ///< leaveOverlapping()
+  std::vector<Index> vertexSurface_;                  ///< per collision vertex: its surface
   /// Per surface, whether the detector's fitted pairs name it, at the latest find().
   std::vector<char> fittedSurface_;
   std::vector<Vec3> predicted_;  ///< per particle: where its motion and gravity take it

@@ -433,23 +433,25 @@ TEST(InitialOverlap, FittedPartsStayFittedAndNeverCross) {
   Simulator simulator(buildSceneTopology(blockOnBlock(0.25f)));
   ASSERT_TRUE(simulator.initialOverlaps().empty());
   ASSERT_GT(simulator.fittedPairs().size(), 100u) << "the blocks' faces are fitted";
-  // A fit gives, and the give still lets the block creep (12 mm by frame 24, 54 mm by frame 96:
-  // bench/results/contacts.md): this bounds the first second only.
-  expectRestingBlockStays(simulator, 24, 0.025);
+  // Its particles held no nearer the base than placed (step_contacts.hpp), the block rests. Left
+  // to the failsafe, it sank into the base by each substep's fall and was lifted back, and crept
+  // 12.9 mm by frame 25 and 27 mm by frame 41 (bench/results/contacts.md).
+  expectRestingBlockStays(simulator, 96, 0.002);
 }
 
 /// The step's stencils (core/collision/step_contacts.hpp) with blockOnBlock(0.25)'s top vertices
 /// over the base, placed a quarter skin above it, every other one moved 20 µm behind the base's
 /// top face (as rounding leaves a vertex of a CAD fit a hair behind its mate): `sunk` and
-/// `inFront` name them. Each sunk one must be held where it is: a `fitted` stencil along the
-/// face's normal, to the side it was placed on, with C(x) = 0 at the step's start, so it is
-/// neither pushed out nor let deeper.
+/// `inFront` name them. Each sunk one, and with `inFrontHeld` each one in front, must be held: a
+/// `fitted` stencil along the face's normal, to the side it was placed on, with C(x) = 0 at the
+/// step's start, so it is neither pushed out nor let deeper (a sunk one where it is, one in front
+/// where it was placed).
 struct SunkFit {
   std::vector<ContactStencil> stencils;
   std::vector<Index> sunk, inFront;
   std::size_t fittedPairs = 0;  ///< the simulator's, at the start
 };
-SunkFit sinkIntoFit(const SceneSetup& scene) {
+SunkFit sinkIntoFit(const SceneSetup& scene, bool inFrontHeld = false) {
   Simulator simulator(buildSceneTopology(scene));
   const SceneTopology& topology = simulator.topology();
   const CollisionGeometry& geometry = simulator.collision();
@@ -476,11 +478,13 @@ SunkFit sinkIntoFit(const SceneSetup& scene) {
   const std::span<const ContactStencil> stencils =
       contacts.find(topology, geometry, detector, state, Scalar(1) / 96);
   fit.stencils.assign(stencils.begin(), stencils.end());
-  for (Index v : fit.sunk) {
-    std::size_t held = 0;
+  std::vector<Index> held = fit.sunk;
+  if (inFrontHeld) held.insert(held.end(), fit.inFront.begin(), fit.inFront.end());
+  for (Index v : held) {
+    std::size_t stencilsOfV = 0;
     for (const ContactStencil& stencil : stencils) {
       if (stencil.particle[0] != v) continue;
-      ++held;
+      ++stencilsOfV;
       EXPECT_TRUE(stencil.fitted) << "vertex " << v;
       EXPECT_GT(stencil.normal.y(), 0.99f)
           << "vertex " << v << ": held to the side it was placed on";
@@ -491,23 +495,20 @@ SunkFit sinkIntoFit(const SceneSetup& scene) {
                                                state.position[stencil.particle[k]].cast<double>());
       EXPECT_NEAR(c, 0, 1e-6) << "vertex " << v << ": held where it is";
     }
-    EXPECT_GE(held, 1u) << "vertex " << v << ", 20 µm behind the face it was placed in front of";
+    EXPECT_GE(stencilsOfV, 1u) << "vertex " << v << ", placed in front of the face";
   }
   return fit;
 }
 
 /// Between parts: left to the failsafe, which counts a fitted crossing only beyond its separation
 /// and leaves one already crossed alone, such vertices of an engine sank 171 µm through their
-/// mates by frame 13. The vertices still in front get no stencil from the fit: a fit gives, and is
-/// never pushed.
-TEST(InitialOverlap, AFittedVertexBehindItsMateIsHeldWhereItIsAndNeverPushed) {
-  const SunkFit fit = sinkIntoFit(blockOnBlock(0.25f));
+/// mates by frame 13; and the vertices still in front, left to it too, let a block fitted on
+/// another sink into it in every substep (FittedPartsStayFittedAndNeverCross).
+TEST(InitialOverlap, AFittedVertexIsHeldWhereItWasPlacedOrSankAndNeverPushed) {
+  const SunkFit fit = sinkIntoFit(blockOnBlock(0.25f), true);
   ASSERT_GT(fit.fittedPairs, 100u) << "the blocks' faces are fitted";
   ASSERT_GE(fit.sunk.size(), 5u);
   ASSERT_GE(fit.inFront.size(), 5u);
-  for (Index v : fit.inFront)
-    for (const ContactStencil& stencil : fit.stencils)
-      EXPECT_NE(stencil.particle[0], v) << "vertex " << v << ", still in front of its mate";
 }
 
 /// Within one closed surface (the two blocks as one body, its walls modelled closer than the
