@@ -495,7 +495,7 @@ SunkFit sinkIntoFit(const SceneSetup& scene, bool inFrontHeld = false) {
                                                state.position[stencil.particle[k]].cast<double>());
       EXPECT_NEAR(c, 0, 1e-6) << "vertex " << v << ": held where it is";
     }
-    EXPECT_GE(stencilsOfV, 1u) << "vertex " << v << ", placed in front of the face";
+    EXPECT_GE(stencilsOfV, 1u) << "vertex " << v << ": nothing holds it";
   }
   return fit;
 }
