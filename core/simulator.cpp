@@ -50,7 +50,6 @@ Simulator::Simulator(std::shared_ptr<const SceneTopology> topology, SimulationSt
   } else if (setAside) {
     initiallySetAside_ = initialOverlaps_.pairs;
     overlappingSurfaces_ = overlappingSurfaces(initialOverlaps_);
-    if (stepContacts_) stepContacts_->leaveOverlapping(overlappingSurfaces_);
     // A pair set aside that no longer intersects is as close as a fit at first: it is left to
     // the failsafe until it is apart by the skin, or the response would throw the parts apart
     // where their overlap ends.
@@ -99,7 +98,8 @@ void Simulator::step(int frame) {
   ++stepsTaken_;
   const Scalar dt = Scalar(substeps_.timeStep);
   if (stepContacts_) {
-    stepper_->keepApart(topology, stepContacts_->find(topology, collision_, detector_, state_, dt));
+    stepper_->keepApart(topology, stepContacts_->find(topology, collision_, detector_, state_, dt,
+                                                      overlappingSurfaces_));
     clock.lap(Stage::Contacts);
   }
   if (stepper_->computeForces(topology, state_, forces_)) clock.lap(Stage::Forces);

@@ -67,8 +67,9 @@ Scalar footOutside(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& x) {
 }  // namespace
 
 void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeometry& geometry,
-                             std::span<const Vec3> start, Index v, Index triangle,
-                             std::vector<Found>& out) const {
+                             std::span<const Vec3> start,
+                             std::span<const std::pair<Index, Index>> overlapping, Index v,
+                             Index triangle, std::vector<Found>& out) const {
   const bool holdOnly = (v & kHoldOnly) != 0;
   v &= ~kHoldOnly;
   const Triangle& corners = geometry.triangleVertices[triangle];
@@ -130,7 +131,7 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
     // the start, one still in front gives: held there, the rim of two balls placed into each
     // other held against the set-aside overlap beside it, and pushed the balls apart.
     if (!placedWithinGap() || placedInFront() < 0) return;
-    if (!behind && holdsSurfacePair(overlapping_, surface, vertexSurface)) return;
+    if (!behind && holdsSurfacePair(overlapping, surface, vertexSurface)) return;
   } else if (holdOnly || closedBehind) {
     return;
   } else if (behind) {
@@ -212,10 +213,9 @@ void StepContacts::tryVertex(const SceneTopology& topology, const CollisionGeome
   out.push_back({(std::uint64_t(v) << 32) | triangle, stencil});
 }
 
-std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology,
-                                                   const CollisionGeometry& geometry,
-                                                   CollisionDetector& detector,
-                                                   const SimulationState& state, Scalar dt) {
+std::span<const ContactStencil> StepContacts::find(
+    const SceneTopology& topology, const CollisionGeometry& geometry, CollisionDetector& detector,
+    const SimulationState& state, Scalar dt, std::span<const std::pair<Index, Index>> overlapping) {
   const Vec3 fall = dt * dt * topology.settings.gravity;
   const std::span<const Vec3> start = state.position;
   // The reach: half of how far each particle's predicted travel departs from its body's mean
@@ -322,7 +322,7 @@ std::span<const ContactStencil> StepContacts::find(const SceneTopology& topology
             corners.push_back(v | flag);
           }
         }
-        for (Index v : corners) tryVertex(topology, geometry, start, v, Index(t), out);
+        for (Index v : corners) tryVertex(topology, geometry, start, overlapping, v, Index(t), out);
       }
     });
   }

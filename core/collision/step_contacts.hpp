@@ -58,17 +58,14 @@ class StepContacts {
 
   StepContacts(const SceneTopology& topology, const CollisionGeometry& geometry);
 
-  /// The stencils of a step of `dt` from `state`, sorted by vertex, then triangle.
+  /// The stencils of a step of `dt` from `state`, sorted by vertex, then triangle. `overlapping`:
+  /// the surface pairs that intersected at the start (sorted, lower first), under
+  /// initial_overlap "set_aside"; between them a fitted vertex in front of its mate gives.
   std::span<const ContactStencil> find(const SceneTopology& topology,
                                        const CollisionGeometry& geometry,
                                        CollisionDetector& detector, const SimulationState& state,
-                                       Scalar dt);
-
-  /// The surface pairs that intersected at the start (sorted, lower first), under
-  /// initial_overlap "set_aside": between them a fitted vertex in front of its mate gives.
-  void leaveOverlapping(std::vector<std::pair<Index, Index>> surfacePairs) {
-    overlapping_ = std::move(surfacePairs);
-  }
+                                       Scalar dt,
+                                       std::span<const std::pair<Index, Index>> overlapping = {});
 
   /// Appends a ContactKind::Held contact for each stencil of the latest find() that `held` (one
   /// flag per stencil) marks, at the vertex's position in `positions`.
@@ -82,12 +79,11 @@ class StepContacts {
   };
   /// Appends the stencil of collision vertex `v` against collision triangle `triangle`, if any.
   void tryVertex(const SceneTopology& topology, const CollisionGeometry& geometry,
-                 std::span<const Vec3> start, Index v, Index triangle,
-                 std::vector<Found>& out) const;
+                 std::span<const Vec3> start, std::span<const std::pair<Index, Index>> overlapping,
+                 Index v, Index triangle, std::vector<Found>& out) const;
 
-  std::vector<Scalar> gap_;  ///< per surface: the distance its contacts keep
-  std::vector<std::pair<Index, Index>> overlapping_;  ///< leaveOverlapping()
-  std::vector<Index> vertexSurface_;                  ///< per collision vertex: its surface
+  std::vector<Scalar> gap_;           ///< per surface: the distance its contacts keep
+  std::vector<Index> vertexSurface_;  ///< per collision vertex: its surface
   /// Per surface, whether the detector's fitted pairs name it, at the latest find().
   std::vector<char> fittedSurface_;
   std::vector<Vec3> predicted_;  ///< per particle: where its motion and gravity take it
