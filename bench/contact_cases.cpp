@@ -6,7 +6,7 @@
 //
 //   contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] [set_aside|separate|ignore]
 //                 [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] [--frames=N]
-//                 [--deep=MICRONS]
+//                 [--deep=MICRONS] [--stage-energy]
 //   contact_cases --header     the table's header, two lines, for the scripts that print rows
 //
 // A mesh file is baked as `softbake run FILE` bakes it; --frames=N overrides the scene's frames.
@@ -36,6 +36,10 @@
 // the start) and its surfaces for overlapping at the start (its own test, which counts touching
 // within rounding; the exact checker's "none overlapped" does not). What the engine's deep pairs
 // were traced by, sessions running, with a temporary print.
+//
+// --stage-energy prints on stderr, at each frame's end, the energy each stage of the substep added
+// over the frame (Simulator::measureStageEnergy): which stage makes a gain, where the rest take
+// it out again. It costs a whole energy sum per stage of every substep.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -77,14 +81,15 @@ int main(int argc, char** argv) {
         stderr,
         "usage: contact_cases SCENE.json|MESH_FILE [explicit|implicit|xpbd] "
         "[set_aside|separate|ignore] [failsafe|nofailsafe] [instep|afterstep] [--csv=FILE] "
-        "[--frames=N] [--deep=MICRONS]\n       contact_cases --header\n");
+        "[--frames=N] [--deep=MICRONS] [--stage-energy]\n       contact_cases --header\n");
     return 1;
   }
   std::FILE* csv = nullptr;
   int frames = 0;
-  // The two flags anywhere after the scene: taken out, the positional arguments close up.
+  // The flags anywhere after the scene: taken out, the positional arguments close up.
   const char* csvPath = nullptr;
   double deepMicrons = -1;
+  bool stageEnergy = false;
   int kept = 2;
   for (int i = 2; i < argc; ++i) {
     if (std::strncmp(argv[i], "--frames=", 9) == 0)
@@ -93,6 +98,8 @@ int main(int argc, char** argv) {
       csvPath = argv[i] + 6;
     else if (std::strncmp(argv[i], "--deep=", 7) == 0)
       deepMicrons = std::atof(argv[i] + 7);
+    else if (std::strcmp(argv[i], "--stage-energy") == 0)
+      stageEnergy = true;
     else
       argv[kept++] = argv[i];
   }
@@ -129,6 +136,7 @@ int main(int argc, char** argv) {
         (settings.collisions.contactsInStep ? ", contacts in the step" : "");
     Simulator simulator(buildSceneTopology(file.setup));
     simulator.measureStages(true);
+    simulator.measureStageEnergy(stageEnergy);
     const double start = computeEnergy(simulator.topology(), simulator.state()).total();
     const test::IntersectionCount atStart =
         test::countIntersectingPairs(simulator.collision(), simulator.state().position);
@@ -221,6 +229,14 @@ int main(int argc, char** argv) {
       framesWithin += count.withinSurfaces > 0;
       const double energy = computeEnergy(simulator.topology(), simulator.state()).total();
       highest = std::max(highest, energy);
+      if (stageEnergy) {
+        std::fprintf(stderr, "stage energy frame %d, J:", frame);
+        const StageEnergies& stages = simulator.lastFrameStats().stageEnergy;
+        for (int stage = 0; stage < kStageCount; ++stage)
+          if (stages[stage] != 0)
+            std::fprintf(stderr, " %s %+.3f", stageName(Stage(stage)), stages[stage]);
+        std::fprintf(stderr, "\n");
+      }
       if (csv)
         std::fprintf(
             csv, "%s,\"%s\",%d,%zu,%zu,%.1f,%.4f,%zu,%zu,%.3g,%zu,%.3g,%zu,%zu\n",

@@ -95,6 +95,7 @@ Simulator::Simulator(SceneTopology topology)
 void Simulator::step(int frame) {
   const SceneTopology& topology = *topology_;
   StageClock clock(measureStages_ ? &stepTimes_ : nullptr);
+  StageEnergyMeter energy(measureStageEnergy_ ? &stats_.stageEnergy : nullptr, topology, state_);
   ++stepsTaken_;
   const Scalar dt = Scalar(substeps_.timeStep);
   if (stepContacts_) {
@@ -105,6 +106,7 @@ void Simulator::step(int frame) {
   if (stepper_->computeForces(topology, state_, forces_)) clock.lap(Stage::Forces);
   if (!stepper_->step(topology, forces_, dt, state_, substepStart_)) reportBlowUp(frame);
   clock.lap(Stage::Integration);
+  energy.lap(Stage::Integration);
   const ResponseMode response = topology.settings.collisions.response;
   if (collides_) {
     detector_.detect(topology, collision_, {substepStart_, state_.position}, &clock);
@@ -120,6 +122,7 @@ void Simulator::step(int frame) {
         topology, collision_, detector_, response, state_, contacts_, edgePushes_, tangled,
         stepContacts_ ? InsideTest::NearestFace : InsideTest::StruckFace, overlappingSurfaces_);
     clock.lap(Stage::Response);
+    energy.lap(Stage::Response);
     stats_.candidatePairs += detector_.candidatePairs().size();
     stats_.contacts += contacts_.size();
     stats_.responses += responses;
@@ -132,9 +135,11 @@ void Simulator::step(int frame) {
   stats_.planeContacts += resolvePlaneContacts(
       topology, substepStart_, state_, response != ResponseMode::None, stepper_->planeHolds());
   clock.lap(Stage::Planes);
+  energy.lap(Stage::Planes);
   if (failsafe_) {
     stats_.failsafe += failsafe_->apply(topology, collision_, detector_, substepStart_, state_, dt);
     clock.lap(Stage::Failsafe);
+    energy.lap(Stage::Failsafe);
   }
   stats_.planeContacts += stepper_->endStep();
 }

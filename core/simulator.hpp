@@ -29,6 +29,7 @@
 #include "core/collision/initial_overlap.hpp"
 #include "core/collision/response.hpp"
 #include "core/collision/step_contacts.hpp"
+#include "core/dynamics/energy.hpp"
 #include "core/dynamics/forces.hpp"
 #include "core/dynamics/stability.hpp"
 #include "core/dynamics/stepper.hpp"
@@ -52,6 +53,8 @@ struct StepStats {
   /// Triangle pairs set aside during the frame: of those that intersected at the start, the ones
   /// that still did at the frame's start (initial_overlap "set_aside").
   std::size_t setAsidePairs = 0;
+  /// The energy each stage added, summed over the substeps; zeros unless measureStageEnergy(true).
+  StageEnergies stageEnergy{};
 };
 
 class Simulator {
@@ -84,6 +87,9 @@ class Simulator {
   /// Time each stage of every following substep (off by default); read with lastStepTimes().
   void measureStages(bool on) { measureStages_ = on; }
   const StageTimes& lastStepTimes() const { return stepTimes_; }
+  /// Sum the energy each stage adds into lastFrameStats().stageEnergy (off by default): a whole
+  /// energy sum per stage of every substep, for tracing an energy gain, never for a bake.
+  void measureStageEnergy(bool on) { measureStageEnergy_ = on; }
   /// The contacts of the latest substep: at the end of advanceToFrame(f), those of frame f, with
   /// the particles touching a plane then (ContactKind::Plane) after the others.
   const std::vector<Contact>& contacts() const { return contacts_; }
@@ -163,6 +169,7 @@ class Simulator {
   bool collides_ = false;
   std::uint64_t stepsTaken_ = 0;
   bool measureStages_ = false;
+  bool measureStageEnergy_ = false;
   StageTimes stepTimes_;
 };
 

@@ -35,4 +35,17 @@ Energy computeEnergy(const SceneTopology& topology, const SimulationState& state
   return energy;
 }
 
+StageEnergyMeter::StageEnergyMeter(StageEnergies* joules, const SceneTopology& topology,
+                                   const SimulationState& state)
+    : joules_(joules), topology_(topology), state_(state) {
+  if (joules_) last_ = computeEnergy(topology_, state_).total();
+}
+
+void StageEnergyMeter::lap(Stage stage) {
+  if (!joules_) return;
+  const double now = computeEnergy(topology_, state_).total();
+  (*joules_)[int(stage)] += now - last_;
+  last_ = now;
+}
+
 }  // namespace softbake

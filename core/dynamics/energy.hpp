@@ -2,8 +2,11 @@
 /// The mechanical energy of a scene, term by term: what the collision response may only take
 /// away (issue: "the response never adds energy"), and what tests and benchmarks track per frame.
 
+#include <array>
+
 #include "core/scene/scene_topology.hpp"
 #include "core/scene/simulation_state.hpp"
+#include "core/stage_timer.hpp"
 
 namespace softbake {
 
@@ -22,5 +25,25 @@ struct Energy {
 };
 
 Energy computeEnergy(const SceneTopology& topology, const SimulationState& state);
+
+/// The energy each stage of a substep adds, in J, by Stage: how an energy gain is traced to the
+/// stage that makes it (bench/results/contacts.md traced the landed engine's so).
+using StageEnergies = std::array<double, kStageCount>;
+
+/// Each lap(stage) adds the change of the scene's energy since the previous lap (or the meter's
+/// start) to `stage`'s entry of `*joules`. Null `joules`: every lap does nothing. On, each lap is a
+/// whole computeEnergy(), which allocates: a diagnostic, never on in a bake.
+class StageEnergyMeter {
+ public:
+  StageEnergyMeter(StageEnergies* joules, const SceneTopology& topology,
+                   const SimulationState& state);
+  void lap(Stage stage);
+
+ private:
+  StageEnergies* joules_;
+  const SceneTopology& topology_;
+  const SimulationState& state_;
+  double last_ = 0;
+};
 
 }  // namespace softbake
